@@ -1,0 +1,19 @@
+//! Catmull-Clark subdivision of arbitrary polygon meshes, exact to OpenSubdiv 3.6.
+//!
+//! The crate follows OpenSubdiv's three layers (see `../shared/STYLE.md`):
+//! - **rules** ([`rules`]): pure functions from a local configuration (valence, sharpness,
+//!   boundary) to weights, after OpenSubdiv's `Sdc`;
+//! - **topology** ([`topology`], [`refine`]): connectivity tables built once per mesh and per
+//!   level, after `Vtr`;
+//! - **evaluation** ([`stencil`], [`limit`]): sparse weights over the control points that turn a
+//!   new frame's positions into the refined or limit surface, after `Far`.
+//!
+//! The control mesh ([`Mesh`]) carries OpenSubdiv's tags (creases, corners, holes) and
+//! [`Options`]; [`obj`] reads and writes it.
+#![warn(missing_docs)]
+
+pub mod mesh;
+pub mod options;
+
+pub use mesh::{Corner, Crease, FaceVarying, Mesh, MeshError, Point, Uv, SHARPNESS_INFINITE};
+pub use options::{BoundaryInterpolation, CreaseMethod, FVarLinear, Options, TriangleRule};
