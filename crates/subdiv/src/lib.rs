@@ -12,8 +12,20 @@
 //! [`Options`]; [`obj`] reads and writes it.
 #![warn(missing_docs)]
 
+pub mod conformance;
+pub mod limit;
 pub mod mesh;
+pub mod obj;
 pub mod options;
+pub mod refine;
+pub mod refiner;
+pub mod rules;
+pub mod sparse;
+pub mod stencil;
+pub mod topology;
 
-pub use mesh::{Corner, Crease, FaceVarying, Mesh, MeshError, Point, Uv, SHARPNESS_INFINITE};
+pub use mesh::{Corner, Crease, FaceVarying, Mesh, MeshError, Point, SHARPNESS_INFINITE, Uv};
 pub use options::{BoundaryInterpolation, CreaseMethod, FVarLinear, Options, TriangleRule};
+pub use refiner::{Refiner, subdivide};
+pub use sparse::{Primvar, SparseRows};
+pub use stencil::StencilTable;

@@ -202,18 +202,29 @@ impl Mesh {
         if self.face_count() == 0 {
             return Err(MeshError::Empty);
         }
-        if let Some(vertex) = self.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        if let Some(vertex) = self
+            .positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
             return Err(MeshError::NonFinitePosition { vertex });
         }
         let count = self.positions.len();
         for face in 0..self.face_count() {
             let fv = self.face(face);
             if fv.len() < 3 {
-                return Err(MeshError::TooFewVertices { face, corners: fv.len() });
+                return Err(MeshError::TooFewVertices {
+                    face,
+                    corners: fv.len(),
+                });
             }
             for (i, &v) in fv.iter().enumerate() {
                 if v as usize >= count {
-                    return Err(MeshError::VertexOutOfRange { face, vertex: v, count });
+                    return Err(MeshError::VertexOutOfRange {
+                        face,
+                        vertex: v,
+                        count,
+                    });
                 }
                 if fv[..i].contains(&v) {
                     return Err(MeshError::RepeatedVertex { face, vertex: v });
@@ -235,7 +246,11 @@ impl Mesh {
                 corners: self.face_vertices.len(),
             });
         }
-        if let Some(value) = uvs.values.iter().position(|uv| !uv.iter().all(|c| c.is_finite())) {
+        if let Some(value) = uvs
+            .values
+            .iter()
+            .position(|uv| !uv.iter().all(|c| c.is_finite()))
+        {
             return Err(MeshError::NonFiniteUv { value });
         }
         let count = uvs.values.len();
@@ -296,6 +311,20 @@ impl Mesh {
         Ok(self)
     }
 
+    /// Reverses the winding of every face, keeping its first corner first (how OpenSubdiv reads a
+    /// left-handed mesh): face `[a, b, c, d]` becomes `[a, d, c, b]`, UV corners likewise.
+    #[must_use]
+    pub fn with_reversed_faces(mut self) -> Self {
+        for f in 0..self.face_count() {
+            let r = self.face_range(f);
+            self.face_vertices[r.start + 1..r.end].reverse();
+            if let Some(uvs) = &mut self.uvs {
+                uvs.indices[r.start + 1..r.end].reverse();
+            }
+        }
+        self
+    }
+
     fn check_tag_vertex(&self, tag: &'static str, vertex: u32) -> Result<(), MeshError> {
         let count = self.positions.len();
         if vertex as usize >= count {
@@ -330,8 +359,15 @@ impl Mesh {
     /// [`MeshError::NonFinitePosition`]; the count must not change (that is a programming error
     /// and panics).
     pub fn set_positions(&mut self, positions: &[Point]) -> Result<(), MeshError> {
-        assert_eq!(positions.len(), self.positions.len(), "vertex count changed");
-        if let Some(vertex) = positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        assert_eq!(
+            positions.len(),
+            self.positions.len(),
+            "vertex count changed"
+        );
+        if let Some(vertex) = positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
             return Err(MeshError::NonFinitePosition { vertex });
         }
         self.positions.copy_from_slice(positions);
@@ -434,7 +470,10 @@ mod tests {
     fn rejects_bad_faces() {
         assert_eq!(
             Mesh::from_polygons(square(), &[[0u32, 1]]).unwrap_err(),
-            MeshError::TooFewVertices { face: 0, corners: 2 }
+            MeshError::TooFewVertices {
+                face: 0,
+                corners: 2
+            }
         );
         assert_eq!(
             Mesh::from_polygons(square(), &[[0u32, 1, 1]]).unwrap_err(),
@@ -442,7 +481,11 @@ mod tests {
         );
         assert_eq!(
             Mesh::from_polygons(square(), &[[0u32, 1, 4]]).unwrap_err(),
-            MeshError::VertexOutOfRange { face: 0, vertex: 4, count: 4 }
+            MeshError::VertexOutOfRange {
+                face: 0,
+                vertex: 4,
+                count: 4
+            }
         );
         assert_eq!(
             Mesh::from_polygons(square(), &[] as &[[u32; 3]]).unwrap_err(),
@@ -459,17 +502,24 @@ mod tests {
     #[test]
     fn rejects_bad_tags() {
         let m = Mesh::from_polygons(square(), &[[0u32, 1, 2, 3]]).unwrap();
-        let crease = |a, b, s| Crease { vertices: [a, b], sharpness: s };
+        let crease = |a, b, s| Crease {
+            vertices: [a, b],
+            sharpness: s,
+        };
         assert_eq!(
             m.clone().with_creases(vec![crease(0, 2, 1.0)]).unwrap_err(),
             MeshError::CreaseNotAnEdge(0, 2)
         );
         assert!(matches!(
-            m.clone().with_creases(vec![crease(0, 1, -1.0)]).unwrap_err(),
+            m.clone()
+                .with_creases(vec![crease(0, 1, -1.0)])
+                .unwrap_err(),
             MeshError::BadSharpness { .. }
         ));
         assert!(matches!(
-            m.clone().with_creases(vec![crease(0, 1, f64::NAN)]).unwrap_err(),
+            m.clone()
+                .with_creases(vec![crease(0, 1, f64::NAN)])
+                .unwrap_err(),
             MeshError::BadSharpness { .. }
         ));
         assert!(m.clone().with_creases(vec![crease(1, 0, 2.0)]).is_ok());
@@ -478,7 +528,11 @@ mod tests {
             MeshError::HoleOutOfRange { face: 1, count: 1 }
         );
         assert!(matches!(
-            m.with_corners(vec![Corner { vertex: 9, sharpness: 1.0 }]).unwrap_err(),
+            m.with_corners(vec![Corner {
+                vertex: 9,
+                sharpness: 1.0
+            }])
+            .unwrap_err(),
             MeshError::TagVertexOutOfRange { vertex: 9, .. }
         ));
     }

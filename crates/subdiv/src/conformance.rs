@@ -1,0 +1,261 @@
+//! Conformance against OpenSubdiv's own output (`../shared/reference/opensubdiv`).
+//!
+//! The reference folder holds OpenSubdiv 3.6.0's Catmark regression shapes (`shapes/`) and what
+//! OpenSubdiv made of them: uniformly refined control points (`refined/NAME_L{1,2,3}.obj`), limit
+//! positions and normals at level 1 (`limit/NAME_L1.obj`) and face-varying UVs under each
+//! interpolation mode (`facevarying/NAME_MODE_L{1,2,3}.obj`). Every comparison here is in
+//! OpenSubdiv's vertex and face order, coordinate by coordinate, within [`TOLERANCE`].
+//!
+//! `catmark_lefthanded` is read with clockwise faces, as OpenSubdiv's regression harness does.
+
+use std::fmt;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use crate::mesh::Mesh;
+use crate::obj;
+use crate::options::FVarLinear;
+use crate::refiner::Refiner;
+
+/// Largest accepted difference per coordinate, relative to the coordinate's magnitude when it
+/// exceeds one.
+pub const TOLERANCE: f64 = 1e-9;
+
+/// An OpenSubdiv output file: vertices, optional UVs and normals, faces.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Reference {
+    /// `v` lines.
+    pub positions: Vec<[f64; 3]>,
+    /// `vt` lines.
+    pub uvs: Vec<[f64; 2]>,
+    /// `vn` lines.
+    pub normals: Vec<[f64; 3]>,
+    /// `f` lines, 0-based vertex indices.
+    pub faces: Vec<Vec<u32>>,
+    /// `f` lines, 0-based UV indices (empty when the faces carry none).
+    pub face_uvs: Vec<Vec<u32>>,
+}
+
+/// Reads an OpenSubdiv reference OBJ.
+///
+/// # Errors
+/// I/O errors and malformed lines, as text.
+pub fn read_reference(path: &Path) -> Result<Reference, String> {
+    let text = fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut r = Reference::default();
+    for (n, line) in text.lines().enumerate() {
+        let bad = || format!("{}:{}: cannot read '{line}'", path.display(), n + 1);
+        let mut it = line.split_whitespace();
+        let nums = |it: std::str::SplitWhitespace<'_>| -> Result<Vec<f64>, String> {
+            it.map(|t| t.parse::<f64>().map_err(|_| bad())).collect()
+        };
+        match it.next() {
+            Some("v") => {
+                let c = nums(it)?;
+                r.positions.push([c[0], c[1], c[2]]);
+            }
+            Some("vt") => {
+                let c = nums(it)?;
+                r.uvs.push([c[0], c[1]]);
+            }
+            Some("vn") => {
+                let c = nums(it)?;
+                r.normals.push([c[0], c[1], c[2]]);
+            }
+            Some("f") => {
+                let (mut fv, mut ft) = (Vec::new(), Vec::new());
+                for corner in it {
+                    let mut parts = corner.split('/');
+                    let index = |p: Option<&str>| -> Result<Option<u32>, String> {
+                        match p {
+                            Some(s) if !s.is_empty() => {
+                                s.parse::<u32>().map(|i| Some(i - 1)).map_err(|_| bad())
+                            }
+                            _ => Ok(None),
+                        }
+                    };
+                    fv.push(index(parts.next())?.ok_or_else(bad)?);
+                    if let Some(t) = index(parts.next())? {
+                        ft.push(t);
+                    }
+                }
+                r.faces.push(fv);
+                if !ft.is_empty() {
+                    r.face_uvs.push(ft);
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(r)
+}
+
+/// What one comparison found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcome {
+    /// Reference file name.
+    pub name: String,
+    /// `None` when everything matched, else what did not.
+    pub failure: Option<String>,
+}
+
+impl fmt::Display for Outcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.failure {
+            None => write!(f, "pass  {}", self.name),
+            Some(why) => write!(f, "FAIL  {}: {why}", self.name),
+        }
+    }
+}
+
+/// Compares vectors coordinate by coordinate; returns the first mismatch.
+fn compare<const N: usize>(
+    what: &str,
+    ours: &[[f64; N]],
+    theirs: &[[f64; N]],
+) -> Result<(), String> {
+    if ours.len() != theirs.len() {
+        return Err(format!(
+            "{} {what} (reference {})",
+            ours.len(),
+            theirs.len()
+        ));
+    }
+    for (i, (a, b)) in ours.iter().zip(theirs).enumerate() {
+        for k in 0..N {
+            let scale = a[k].abs().max(b[k].abs()).max(1.0);
+            if (a[k] - b[k]).abs() > TOLERANCE * scale || a[k].is_nan() != b[k].is_nan() {
+                return Err(format!("{what} {i}: {a:?} vs reference {b:?}"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reads a shape as OpenSubdiv's regression harness does.
+///
+/// # Errors
+/// The shape cannot be read.
+pub fn read_shape(path: &Path) -> Result<Mesh, String> {
+    let doc = obj::read(path).map_err(|e| e.to_string())?;
+    let left_handed = path.file_stem().is_some_and(|s| s == "catmark_lefthanded");
+    Ok(if left_handed {
+        doc.mesh.with_reversed_faces()
+    } else {
+        doc.mesh
+    })
+}
+
+fn faces_without_holes(mesh: &Mesh) -> Vec<Vec<u32>> {
+    let holes: std::collections::HashSet<u32> = mesh.holes().iter().copied().collect();
+    (0..mesh.face_count())
+        .filter(|&f| !holes.contains(&crate::mesh::to_u32(f)))
+        .map(|f| mesh.face(f).to_vec())
+        .collect()
+}
+
+/// Checks the refined control points and faces of `shape` at `level` against `reference`.
+#[must_use]
+pub fn check_refined(shape: &Mesh, level: usize, reference: &Reference) -> Result<(), String> {
+    let refiner = Refiner::new(shape, level);
+    let points = refiner.refine(shape.positions());
+    let ours: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
+    compare("vertices", &ours, &reference.positions)?;
+    let mesh = refiner.refined_mesh(points, None);
+    if faces_without_holes(&mesh) != reference.faces {
+        return Err("faces differ".into());
+    }
+    let stencils = refiner.stencils();
+    let mut via_stencils = vec![crate::mesh::Point::origin(); stencils.len()];
+    stencils.apply(shape.positions(), &mut via_stencils);
+    let ours: Vec<[f64; 3]> = via_stencils.iter().map(|p| [p.x, p.y, p.z]).collect();
+    compare("stencil vertices", &ours, &reference.positions)
+}
+
+/// Checks limit positions and (where the reference has them) normals at level 1.
+#[must_use]
+pub fn check_limit(shape: &Mesh, reference: &Reference) -> Result<(), String> {
+    let refiner = Refiner::new(shape, 1);
+    let points: Vec<_> = refiner
+        .refine(shape.positions())
+        .iter()
+        .map(|p| p.coords)
+        .collect();
+    let (pos, normals) = refiner.limit_masks().evaluate(&points);
+    let ours: Vec<[f64; 3]> = pos.iter().map(|p| [p.x, p.y, p.z]).collect();
+    compare("limit positions", &ours, &reference.positions)?;
+    if !reference.normals.is_empty() {
+        let ours: Vec<[f64; 3]> = normals.iter().map(|n| [n.x, n.y, n.z]).collect();
+        compare("limit normals", &ours, &reference.normals)?;
+    }
+    Ok(())
+}
+
+/// Runs every comparison the reference folder supports and returns one outcome per file.
+#[must_use]
+pub fn run(dir: &Path) -> Vec<Outcome> {
+    let mut outcomes = Vec::new();
+    let mut files: Vec<PathBuf> = ["refined", "limit", "facevarying"]
+        .iter()
+        .filter_map(|sub| fs::read_dir(dir.join(sub)).ok())
+        .flatten()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
+        .collect();
+    files.sort();
+    for file in files {
+        let name = file
+            .strip_prefix(dir)
+            .unwrap_or(&file)
+            .display()
+            .to_string();
+        let failure = check_file(dir, &file).err();
+        outcomes.push(Outcome { name, failure });
+    }
+    outcomes
+}
+
+/// Parses `NAME_L3` or `NAME_MODE_L3` into the shape name, the mode and the level.
+fn split_name(stem: &str) -> Option<(&str, Option<FVarLinear>, usize)> {
+    let (rest, level) = stem.rsplit_once("_L")?;
+    let level = level.parse().ok()?;
+    for (mode, name) in [
+        (FVarLinear::None, "none"),
+        (FVarLinear::CornersOnly, "cornersonly"),
+        (FVarLinear::CornersPlus1, "cornersplus1"),
+        (FVarLinear::CornersPlus2, "cornersplus2"),
+        (FVarLinear::Boundaries, "boundaries"),
+        (FVarLinear::All, "all"),
+    ] {
+        if let Some(shape) = rest.strip_suffix(name).and_then(|s| s.strip_suffix('_')) {
+            return Some((shape, Some(mode), level));
+        }
+    }
+    Some((rest, None, level))
+}
+
+fn check_file(dir: &Path, file: &Path) -> Result<(), String> {
+    let kind = file
+        .parent()
+        .and_then(Path::file_name)
+        .and_then(|k| k.to_str())
+        .unwrap_or("");
+    let stem = file.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+    let (shape_name, mode, level) = split_name(stem).ok_or("unrecognised file name")?;
+    let mode = if kind == "facevarying" { mode } else { None };
+    let shape_name = if kind == "facevarying" {
+        shape_name
+    } else {
+        stem.rsplit_once("_L").map_or(stem, |s| s.0)
+    };
+    let shape = read_shape(&dir.join("shapes").join(format!("{shape_name}.obj")))?;
+    let reference = read_reference(file)?;
+    match kind {
+        "refined" => check_refined(&shape, level, &reference),
+        "limit" => check_limit(&shape, &reference),
+        _ => {
+            let _ = mode;
+            Err("face-varying refinement is not implemented yet".into())
+        }
+    }
+}

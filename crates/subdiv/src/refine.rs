@@ -1,0 +1,491 @@
+//! One uniform Catmull-Clark refinement step: the child level's topology and tags, and the
+//! weights that make its vertices from the parent's (OpenSubdiv's `Vtr::QuadRefinement` and
+//! `Far::PrimvarRefiner`).
+//!
+//! Numbering follows OpenSubdiv with vertices first: child vertices are the vertex points (one
+//! per parent vertex), then the face points (one per parent face), then the edge points (one per
+//! parent edge). An n-sided parent face has n quad children; child `j` is
+//! (vertex point of corner `j`, edge point of edge `j`, face point, edge point of edge `j−1`),
+//! rotated for quads so the vertex point stays at index `j`. Child edges are first the face
+//! interior edges (face point → edge point, parent face by parent face), then the two halves of
+//! each parent edge (edge point → vertex point of each end). Incidence lists are ordered so that
+//! a manifold child vertex keeps its counter-clockwise order, as OpenSubdiv builds them.
+//!
+//! Sharpness decays (uniform or Chaikin, see [`crate::rules::crease`]); holes, non-manifold
+//! flags and sharpness propagate from parent to child components.
+
+use rayon::prelude::*;
+
+use crate::mesh::to_u32;
+use crate::options::{CreaseMethod, Options};
+use crate::rules::crease;
+use crate::rules::masks::{self, EdgeMask, Mask, VertexNeighbourhood};
+use crate::sparse::{CHUNK, Primvar, SparseRows};
+use crate::topology::{Csr, Level};
+
+/// A refinement step: the child level and the weights of its vertices.
+#[derive(Clone, Debug)]
+pub struct Refinement {
+    /// The refined level.
+    pub child: Level,
+    /// One row per child vertex. A column below the parent's vertex count names a parent
+    /// vertex; a column `c` at or above it names the child vertex `c − parent vertex count`,
+    /// always a face point (vertex and edge points use face points, as OpenSubdiv's masks do).
+    pub weights: SparseRows,
+    /// Where each kind of child vertex starts.
+    pub layout: ChildLayout,
+}
+
+/// Index ranges of the three kinds of child vertices: `[0, faces)` vertex points,
+/// `[faces, edges)` face points, `[edges, total)` edge points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ChildLayout {
+    /// Number of parent vertices = first face point.
+    pub faces: usize,
+    /// First edge point.
+    pub edges: usize,
+}
+
+impl ChildLayout {
+    fn new(parent: &Level) -> Self {
+        Self {
+            faces: parent.vertex_count,
+            edges: parent.vertex_count + parent.face_count(),
+        }
+    }
+    fn of_vertex(self, v: usize) -> u32 {
+        to_u32(v)
+    }
+    fn of_face(self, f: usize) -> u32 {
+        to_u32(self.faces + f)
+    }
+    fn of_edge(self, e: usize) -> u32 {
+        to_u32(self.edges + e)
+    }
+}
+
+impl Refinement {
+    /// Refines `parent` once.
+    #[must_use]
+    pub fn new(parent: &Level, options: &Options) -> Self {
+        let layout = ChildLayout::new(parent);
+        let child = child_topology(parent, layout, options.crease_method);
+        let weights = vertex_weights(parent, &child, layout, options);
+        Self {
+            child,
+            weights,
+            layout,
+        }
+    }
+
+    /// Computes the child level's values from the parent's: face points first, then vertex and
+    /// edge points, each in parallel over rows.
+    pub fn apply<T: Primvar>(&self, parent: &[T], child: &mut [T]) {
+        apply_two_phase(&self.weights, self.layout, parent, child);
+    }
+}
+
+/// Applies a table whose columns reach into the child face points (see
+/// [`Refinement::weights`]); shared by vertex and face-varying data.
+pub(crate) fn apply_two_phase<T: Primvar>(
+    w: &SparseRows,
+    layout: ChildLayout,
+    parent: &[T],
+    child: &mut [T],
+) {
+    let np = parent.len();
+    let (vertex_points, rest) = child.split_at_mut(layout.faces);
+    let (face_points, edge_points) = rest.split_at_mut(layout.edges - layout.faces);
+    face_points
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .for_each(|(c, out)| {
+            for (k, d) in out.iter_mut().enumerate() {
+                *d = w.gather(layout.faces + c * CHUNK + k, parent);
+            }
+        });
+    let face_points = &*face_points;
+    let fill = |first_row: usize, out: &mut [T]| {
+        out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
+            for (k, d) in out.iter_mut().enumerate() {
+                let (cols, ws) = w.row(first_row + c * CHUNK + k);
+                let mut acc = T::zero();
+                for (&col, &wt) in cols.iter().zip(ws) {
+                    let col = col as usize;
+                    let v = if col < np {
+                        &parent[col]
+                    } else {
+                        &face_points[col - np - layout.faces]
+                    };
+                    acc.add_scaled(v, wt);
+                }
+                *d = acc;
+            }
+        });
+    };
+    fill(0, vertex_points);
+    fill(layout.edges, edge_points);
+}
+
+/// The child level's topology and tags.
+fn child_topology(p: &Level, layout: ChildLayout, method: CreaseMethod) -> Level {
+    let corners = p.face_verts.items.len();
+    let (nv, nf, ne) = (p.vertex_count, p.face_count(), p.edge_count());
+    let half = |e: usize, k: usize| to_u32(corners + 2 * e + k);
+    let mut c = Level {
+        vertex_count: nv + nf + ne,
+        face_verts: Csr {
+            offsets: (0..=corners).map(|i| to_u32(4 * i)).collect(),
+            items: vec![0; 4 * corners],
+        },
+        face_edges: vec![0; 4 * corners],
+        edge_verts: Vec::with_capacity(corners + 2 * ne),
+        ..Level::default()
+    };
+    // Faces: vertices and edges of each child quad.
+    for f in 0..nf {
+        let range = p.face_verts.range(f);
+        let n = range.len();
+        let fv = &p.face_verts.items[range.clone()];
+        let fe = &p.face_edges[range.clone()];
+        for j in 0..n {
+            let jp = (j + n - 1) % n;
+            let corner_in_edge = |e: u32| usize::from(p.edge_verts[e as usize][0] != fv[j]);
+            let verts = [
+                layout.of_vertex(fv[j] as usize),
+                layout.of_edge(fe[j] as usize),
+                layout.of_face(f),
+                layout.of_edge(fe[jp] as usize),
+            ];
+            let edges = [
+                half(fe[j] as usize, corner_in_edge(fe[j])),
+                to_u32(range.start + j),
+                to_u32(range.start + jp),
+                half(fe[jp] as usize, corner_in_edge(fe[jp])),
+            ];
+            // Quads keep the vertex point at index j; other polygons put it first.
+            let rot = if n == 4 { j } else { 0 };
+            let base = 4 * (range.start + j);
+            for k in 0..4 {
+                c.face_verts.items[base + (k + rot) % 4] = verts[k];
+                c.face_edges[base + (k + rot) % 4] = edges[k];
+            }
+        }
+    }
+    // Edges: interior edges of faces, then halves of parent edges.
+    for f in 0..nf {
+        for (j, &e) in p.face_edges[p.face_verts.range(f)].iter().enumerate() {
+            let _ = j;
+            c.edge_verts
+                .push([layout.of_face(f), layout.of_edge(e as usize)]);
+        }
+    }
+    for (e, &[a, b]) in p.edge_verts.iter().enumerate() {
+        c.edge_verts
+            .push([layout.of_edge(e), layout.of_vertex(a as usize)]);
+        c.edge_verts
+            .push([layout.of_edge(e), layout.of_vertex(b as usize)]);
+    }
+    child_edge_faces(p, &mut c);
+    child_vertex_faces(p, layout, &mut c);
+    child_vertex_edges(p, layout, &mut c);
+    child_tags(p, layout, method, &mut c);
+    c
+}
+
+/// The child quad at corner `j` of parent face `f`, and the corner of that quad holding a
+/// given role: quads are rotated by `j`, other polygons are not.
+fn child_face(p: &Level, f: usize, j: usize) -> u32 {
+    to_u32(p.face_verts.offsets[f] as usize + j)
+}
+
+fn child_edge_faces(p: &Level, c: &mut Level) {
+    let corners = p.face_verts.items.len();
+    let mut counts = vec![2u32; corners];
+    counts.extend(
+        p.edge_faces
+            .offsets
+            .windows(2)
+            .flat_map(|w| [w[1] - w[0]; 2]),
+    );
+    c.edge_faces = Csr::with_counts(counts);
+    c.edge_face_local = vec![0; c.edge_faces.items.len()];
+    let mut slot = 0usize;
+    for f in 0..p.face_count() {
+        let n = p.face_verts.range(f).len();
+        for j in 0..n {
+            let jn = (j + 1) % n;
+            let (l0, l1) = if n == 4 { (jn, (jn + 2) % 4) } else { (1, 2) };
+            c.edge_faces.items[slot] = child_face(p, f, j);
+            c.edge_face_local[slot] = to_u32(l0);
+            c.edge_faces.items[slot + 1] = child_face(p, f, jn);
+            c.edge_face_local[slot + 1] = to_u32(l1);
+            slot += 2;
+        }
+    }
+    for e in 0..p.edge_count() {
+        let ends = p.edge_verts[e];
+        for end in ends {
+            for (k, &pf) in p.edge_faces.row(e).iter().enumerate() {
+                let l = p.edge_face_local[p.edge_faces.offsets[e] as usize + k] as usize;
+                let fr = p.face_verts.range(pf as usize);
+                let n = fr.len();
+                let of_edge = usize::from(p.face_verts.items[fr.start + l] != end);
+                c.edge_faces.items[slot] = child_face(p, pf as usize, (l + of_edge) % n);
+                c.edge_face_local[slot] = to_u32(if n == 4 {
+                    l
+                } else if of_edge == 1 {
+                    3
+                } else {
+                    0
+                });
+                slot += 1;
+            }
+        }
+    }
+}
+
+fn child_vertex_faces(p: &Level, layout: ChildLayout, c: &mut Level) {
+    let (nv, nf, ne) = (p.vertex_count, p.face_count(), p.edge_count());
+    let counts = (0..nv)
+        .map(|v| to_u32(p.vert_faces.range(v).len()))
+        .chain((0..nf).map(|f| to_u32(p.face_verts.range(f).len())))
+        .chain((0..ne).map(|e| to_u32(2 * p.edge_faces.range(e).len())));
+    c.vert_faces = Csr::with_counts(counts);
+    c.vert_face_local = vec![0; c.vert_faces.items.len()];
+    let mut slot = 0usize;
+    let mut put = |c: &mut Level, face: u32, local: usize| {
+        c.vert_faces.items[slot] = face;
+        c.vert_face_local[slot] = to_u32(local);
+        slot += 1;
+    };
+    for v in 0..nv {
+        for i in p.vert_faces.range(v) {
+            let (f, l) = (
+                p.vert_faces.items[i] as usize,
+                p.vert_face_local[i] as usize,
+            );
+            let quad = p.face_verts.range(f).len() == 4;
+            put(c, child_face(p, f, l), if quad { l } else { 0 });
+        }
+    }
+    debug_assert_eq!(layout.faces, nv);
+    for f in 0..nf {
+        let n = p.face_verts.range(f).len();
+        for j in 0..n {
+            put(c, child_face(p, f, j), if n == 4 { (j + 2) % 4 } else { 2 });
+        }
+    }
+    for e in 0..ne {
+        for i in p.edge_faces.range(e) {
+            let (f, l) = (
+                p.edge_faces.items[i] as usize,
+                p.edge_face_local[i] as usize,
+            );
+            let n = p.face_verts.range(f).len();
+            let l1 = (l + 1) % n;
+            put(c, child_face(p, f, l1), if n == 4 { l } else { 3 });
+            put(c, child_face(p, f, l), if n == 4 { l1 } else { 1 });
+        }
+    }
+}
+
+fn child_vertex_edges(p: &Level, layout: ChildLayout, c: &mut Level) {
+    let (nv, nf, ne) = (p.vertex_count, p.face_count(), p.edge_count());
+    let corners = p.face_verts.items.len();
+    let half = |e: usize, k: usize| to_u32(corners + 2 * e + k);
+    let counts = (0..nv)
+        .map(|v| to_u32(p.vert_edges.range(v).len()))
+        .chain((0..nf).map(|f| to_u32(p.face_verts.range(f).len())))
+        .chain((0..ne).map(|e| to_u32(2 + p.edge_faces.range(e).len())));
+    c.vert_edges = Csr::with_counts(counts);
+    let mut slot = 0usize;
+    for v in 0..nv {
+        for &e in p.vert_edges.row(v) {
+            let k = usize::from(p.edge_verts[e as usize][0] != to_u32(v));
+            c.vert_edges.items[slot] = half(e as usize, k);
+            slot += 1;
+        }
+    }
+    debug_assert_eq!(layout.edges, nv + nf);
+    for f in 0..nf {
+        let r = p.face_verts.range(f);
+        let n = r.len();
+        for j in 0..n {
+            c.vert_edges.items[slot] = to_u32(r.start + (j + n - 1) % n);
+            slot += 1;
+        }
+    }
+    for e in 0..ne {
+        let faces = p.edge_faces.range(e);
+        let start = slot;
+        let mut list = [half(e, 0), half(e, 1)].to_vec();
+        for (i, idx) in faces.enumerate() {
+            let (f, l) = (
+                p.edge_faces.items[idx] as usize,
+                p.edge_face_local[idx] as usize,
+            );
+            list.push(to_u32(p.face_verts.offsets[f] as usize + l));
+            if i == 0 {
+                // Order as (edge half, face edge, edge half, ...) following the first face.
+                if p.face_verts.items[p.face_verts.offsets[f] as usize + l] == p.edge_verts[e][0] {
+                    list.swap(0, 1);
+                }
+                list.swap(1, 2);
+            }
+        }
+        c.vert_edges.items[start..start + list.len()].copy_from_slice(&list);
+        slot += list.len();
+    }
+}
+
+/// Sharpness, non-manifold flags, holes and rules of the child level.
+fn child_tags(p: &Level, layout: ChildLayout, method: CreaseMethod, c: &mut Level) {
+    let corners = p.face_verts.items.len();
+    let (nv, nf, ne) = (p.vertex_count, p.face_count(), p.edge_count());
+    c.edge_sharpness = vec![0.0; corners + 2 * ne];
+    let mut parent_s = Vec::new();
+    let mut child_s = Vec::new();
+    for v in 0..nv {
+        let edges = p.vert_edges.row(v);
+        parent_s.clear();
+        parent_s.extend(edges.iter().map(|&e| p.edge_sharpness[e as usize]));
+        if !parent_s.iter().any(|&s| crease::is_sharp(s)) {
+            continue;
+        }
+        child_s.resize(parent_s.len(), 0.0);
+        crease::subdivide_edges_around_vertex(method, &parent_s, &mut child_s);
+        for (&e, &s) in edges.iter().zip(&child_s) {
+            let k = usize::from(p.edge_verts[e as usize][0] != to_u32(v));
+            c.edge_sharpness[corners + 2 * e as usize + k] = s;
+        }
+    }
+    c.vertex_sharpness = p
+        .vertex_sharpness
+        .iter()
+        .map(|&s| crease::decrement(s))
+        .collect();
+    c.vertex_sharpness.resize(nv + nf + ne, 0.0);
+    c.edge_nonmanifold = vec![false; corners];
+    c.edge_nonmanifold
+        .extend(p.edge_nonmanifold.iter().flat_map(|&n| [n, n]));
+    c.vertex_nonmanifold = p.vertex_nonmanifold.clone();
+    c.vertex_nonmanifold.resize(layout.edges, false);
+    c.vertex_nonmanifold.extend_from_slice(&p.edge_nonmanifold);
+    c.face_hole = (0..nf)
+        .flat_map(|f| std::iter::repeat_n(p.face_hole[f], p.face_verts.range(f).len()))
+        .collect();
+    c.assign_rules();
+}
+
+/// The weights of every child vertex (see [`Refinement::weights`]), built in parallel chunks.
+fn vertex_weights(p: &Level, c: &Level, layout: ChildLayout, options: &Options) -> SparseRows {
+    let np = p.vertex_count;
+    let face_point = |f: usize| to_u32(np + layout.faces + f);
+    let rows = |range: std::ops::Range<usize>,
+                row: &(dyn Fn(usize, &mut Scratch, &mut SparseRows) + Sync)| {
+        let chunks: Vec<SparseRows> = range
+            .clone()
+            .step_by(CHUNK)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|start| {
+                let mut out = SparseRows::new();
+                let mut scratch = Scratch::default();
+                for i in start..(start + CHUNK).min(range.end) {
+                    row(i, &mut scratch, &mut out);
+                    out.end_row();
+                }
+                out
+            })
+            .collect();
+        SparseRows::concat(chunks)
+    };
+    let vertex_rows = rows(0..p.vertex_count, &|v, s, out| {
+        vertex_row(p, c, options.crease_method, v, &face_point, s, out);
+    });
+    let face_rows = rows(0..p.face_count(), &|f, _, out| {
+        let fv = p.face_verts.row(f);
+        let w = 1.0 / fv.len() as f64;
+        for &v in fv {
+            out.push(v, w);
+        }
+    });
+    let edge_rows = rows(0..p.edge_count(), &|e, s, out| {
+        let faces = p.edge_faces.row(e);
+        s.sizes.clear();
+        s.sizes
+            .extend(faces.iter().map(|&f| p.face_verts.range(f as usize).len()));
+        let child_rule = c.vertex_rule[layout.of_edge(e) as usize];
+        masks::edge_point(
+            options.triangle_rule,
+            p.edge_sharpness[e],
+            child_rule,
+            &s.sizes,
+            &mut s.edge,
+        );
+        for (&f, &w) in faces.iter().zip(&s.edge.faces) {
+            out.push(face_point(f as usize), w);
+        }
+        for v in p.edge_verts[e] {
+            out.push(v, s.edge.vertex);
+        }
+    });
+    let mut all = vertex_rows;
+    all.append(&face_rows);
+    all.append(&edge_rows);
+    all
+}
+
+#[derive(Default)]
+struct Scratch {
+    mask: Mask,
+    blend: Mask,
+    edge: EdgeMask,
+    sizes: Vec<usize>,
+    parent_s: Vec<f32>,
+    child_s: Vec<f32>,
+}
+
+fn vertex_row(
+    p: &Level,
+    c: &Level,
+    method: CreaseMethod,
+    v: usize,
+    face_point: &dyn Fn(usize) -> u32,
+    s: &mut Scratch,
+    out: &mut SparseRows,
+) {
+    let edges = p.vert_edges.row(v);
+    let corners = p.face_verts.items.len();
+    s.parent_s.clear();
+    s.parent_s
+        .extend(edges.iter().map(|&e| p.edge_sharpness[e as usize]));
+    s.child_s.clear();
+    s.child_s.extend(edges.iter().map(|&e| {
+        let k = usize::from(p.edge_verts[e as usize][0] != to_u32(v));
+        c.edge_sharpness[corners + 2 * e as usize + k]
+    }));
+    let hood = VertexNeighbourhood {
+        faces: p.vert_faces.range(v).len(),
+        parent_rule: p.vertex_rule[v],
+        child_rule: c.vertex_rule[v],
+        parent_sharpness: p.vertex_sharpness[v],
+        child_sharpness: c.vertex_sharpness[v],
+        parent_edges: &s.parent_s,
+        child_edges: &s.child_s,
+    };
+    masks::vertex_point(method, &hood, &mut s.mask, &mut s.blend);
+    // Smaller weights first, as OpenSubdiv applies them: faces, edges, then the vertex.
+    for (&f, &w) in p.vert_faces.row(v).iter().zip(&s.mask.faces) {
+        if w != 0.0 {
+            out.push(face_point(f as usize), w);
+        }
+    }
+    for (&e, &w) in edges.iter().zip(&s.mask.edges) {
+        if w != 0.0 {
+            out.push(p.other_end(e, to_u32(v)), w);
+        }
+    }
+    out.push(to_u32(v), s.mask.vertex);
+}

@@ -1,0 +1,172 @@
+//! Uniform refinement of a control mesh to a chosen level (`Far::TopologyRefiner` with
+//! `RefineUniform`, plus `Far::PrimvarRefiner`).
+//!
+//! [`Refiner::new`] builds every level's topology once. Positions, UVs or any per-vertex field
+//! are then refined level by level ([`Refiner::refine`]), or through a [`StencilTable`] built once
+//! ([`Refiner::stencils`]) when the same topology is evaluated every frame.
+
+use nalgebra::Vector3;
+
+use crate::limit::LimitMasks;
+use crate::mesh::{Corner, Crease, FaceVarying, Mesh, Point};
+use crate::options::{BoundaryInterpolation, Options};
+use crate::refine::Refinement;
+use crate::rules::crease;
+use crate::sparse::Primvar;
+use crate::stencil::StencilTable;
+use crate::topology::Level;
+
+/// The topology of every level of a uniform refinement.
+#[derive(Clone, Debug)]
+pub struct Refiner {
+    options: Options,
+    base: Level,
+    steps: Vec<Refinement>,
+}
+
+impl Refiner {
+    /// Builds the topology of `levels` uniform refinements of `mesh`.
+    #[must_use]
+    pub fn new(mesh: &Mesh, levels: usize) -> Self {
+        let options = mesh.options;
+        let base = Level::from_mesh(mesh);
+        let mut steps: Vec<Refinement> = Vec::with_capacity(levels);
+        for _ in 0..levels {
+            let parent = steps.last().map_or(&base, |s| &s.child);
+            steps.push(Refinement::new(parent, &options));
+        }
+        Self {
+            options,
+            base,
+            steps,
+        }
+    }
+
+    /// Number of refinement levels.
+    #[must_use]
+    pub fn levels(&self) -> usize {
+        self.steps.len()
+    }
+
+    /// The topology of level `l` (0 is the control mesh).
+    #[must_use]
+    pub fn level(&self, l: usize) -> &Level {
+        if l == 0 {
+            &self.base
+        } else {
+            &self.steps[l - 1].child
+        }
+    }
+
+    /// The last level.
+    #[must_use]
+    pub fn last(&self) -> &Level {
+        self.level(self.levels())
+    }
+
+    /// The refinement steps, level 0→1 first.
+    #[must_use]
+    pub fn steps(&self) -> &[Refinement] {
+        &self.steps
+    }
+
+    /// Refines per-vertex values (positions, scalar fields) to the last level, level by level.
+    #[must_use]
+    pub fn refine<T: Primvar>(&self, control: &[T]) -> Vec<T> {
+        let mut current = control.to_vec();
+        for step in &self.steps {
+            let mut next = vec![T::zero(); step.child.vertex_count];
+            step.apply(&current, &mut next);
+            current = next;
+        }
+        current
+    }
+
+    /// Stencils of the last level's vertices over the control points.
+    #[must_use]
+    pub fn stencils(&self) -> StencilTable {
+        let mut table = StencilTable::identity(self.base.vertex_count);
+        for step in &self.steps {
+            table = table.refine(step);
+        }
+        table
+    }
+
+    /// Limit masks of the last level's vertices over that level's vertices.
+    #[must_use]
+    pub fn limit_masks(&self) -> LimitMasks {
+        LimitMasks::new(self.last())
+    }
+
+    /// The last level as a mesh: refined positions, quads (holes tagged), the sharpness that
+    /// remains after refinement, refined UVs, and the control mesh's options.
+    ///
+    /// # Panics
+    /// If `positions` is not the last level's vertex count.
+    #[must_use]
+    pub fn refined_mesh(&self, positions: Vec<Point>, uvs: Option<FaceVarying>) -> Mesh {
+        let level = self.last();
+        assert_eq!(positions.len(), level.vertex_count);
+        let mut mesh = Mesh::from_flat(
+            positions,
+            level.face_verts.offsets.clone(),
+            level.face_verts.items.clone(),
+        )
+        .expect("refined topology is valid");
+        mesh.options = self.options;
+        let creases = (0..level.edge_count())
+            .filter(|&e| {
+                crease::is_sharp(level.edge_sharpness[e])
+                    && !level.is_boundary_edge(e)
+                    && !level.edge_nonmanifold[e]
+            })
+            .map(|e| Crease {
+                vertices: level.edge_verts[e],
+                sharpness: f64::from(level.edge_sharpness[e]),
+            })
+            .collect();
+        let corner_option = self.options.boundary == BoundaryInterpolation::EdgeAndCorner;
+        let corners = (0..level.vertex_count)
+            .filter(|&v| {
+                let topological_corner =
+                    level.vert_faces.range(v).len() == 1 && level.vert_edges.range(v).len() == 2;
+                crease::is_sharp(level.vertex_sharpness[v])
+                    && !level.vertex_nonmanifold[v]
+                    && !(corner_option && topological_corner)
+            })
+            .map(|v| Corner {
+                vertex: crate::mesh::to_u32(v),
+                sharpness: f64::from(level.vertex_sharpness[v]),
+            })
+            .collect();
+        let holes = (0..level.face_count())
+            .filter(|&f| level.face_hole[f])
+            .map(crate::mesh::to_u32)
+            .collect();
+        let mut mesh = mesh
+            .with_creases(creases)
+            .and_then(|m| m.with_corners(corners))
+            .and_then(|m| m.with_holes(holes))
+            .expect("refined tags are valid");
+        if let Some(uvs) = uvs {
+            mesh = mesh.with_uvs(uvs).expect("refined UVs are valid");
+        }
+        mesh
+    }
+}
+
+/// Refines a mesh's positions and UVs to `levels` and returns the refined mesh and, when asked,
+/// the limit positions replacing the refined ones and the limit normals.
+#[must_use]
+pub fn subdivide(mesh: &Mesh, levels: usize, limit: bool) -> (Mesh, Option<Vec<Vector3<f64>>>) {
+    let refiner = Refiner::new(mesh, levels);
+    let mut positions = refiner.refine(mesh.positions());
+    let uvs = None;
+    let normals = limit.then(|| {
+        let coords: Vec<Vector3<f64>> = positions.iter().map(|p| p.coords).collect();
+        let (pos, normals) = refiner.limit_masks().evaluate(&coords);
+        positions = pos.into_iter().map(Point::from).collect();
+        normals
+    });
+    (refiner.refined_mesh(positions, uvs), normals)
+}

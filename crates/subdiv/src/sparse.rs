@@ -1,0 +1,161 @@
+//! Sparse weight tables and the values they combine.
+//!
+//! Every linear map in the crate — one refinement step, a stencil table from control points to
+//! refined or limit points, a face-varying step — is a [`SparseRows`] table: one row per output
+//! value, each a list of (input index, weight). Applying a table is a gather, parallel over rows
+//! and independent of the thread count (each row is summed in its own fixed order).
+
+use nalgebra::{Point3, Vector2, Vector3};
+use rayon::prelude::*;
+
+/// A value that can be interpolated: positions, UVs, scalar fields.
+pub trait Primvar: Copy + Send + Sync {
+    /// The additive identity.
+    fn zero() -> Self;
+    /// `self += w * other`.
+    fn add_scaled(&mut self, other: &Self, w: f64);
+}
+
+impl Primvar for f64 {
+    fn zero() -> Self {
+        0.0
+    }
+    fn add_scaled(&mut self, other: &Self, w: f64) {
+        *self += w * other;
+    }
+}
+
+impl Primvar for Vector2<f64> {
+    fn zero() -> Self {
+        Self::zeros()
+    }
+    fn add_scaled(&mut self, other: &Self, w: f64) {
+        self.x += w * other.x;
+        self.y += w * other.y;
+    }
+}
+
+impl Primvar for Vector3<f64> {
+    fn zero() -> Self {
+        Self::zeros()
+    }
+    fn add_scaled(&mut self, other: &Self, w: f64) {
+        self.x += w * other.x;
+        self.y += w * other.y;
+        self.z += w * other.z;
+    }
+}
+
+impl Primvar for Point3<f64> {
+    fn zero() -> Self {
+        Self::origin()
+    }
+    fn add_scaled(&mut self, other: &Self, w: f64) {
+        self.coords.add_scaled(&other.coords, w);
+    }
+}
+
+/// Rows of (column, weight) pairs in CSR form.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SparseRows {
+    /// Row starts; one more than the number of rows.
+    pub offsets: Vec<u32>,
+    /// Column of each entry.
+    pub cols: Vec<u32>,
+    /// Weight of each entry.
+    pub weights: Vec<f64>,
+}
+
+/// Rows per parallel task: large enough to amortise scheduling, small enough to balance.
+pub(crate) const CHUNK: usize = 4096;
+
+impl SparseRows {
+    /// An empty table ready for [`Self::push`].
+    #[must_use]
+    pub fn new() -> Self {
+        Self {
+            offsets: vec![0],
+            cols: Vec::new(),
+            weights: Vec::new(),
+        }
+    }
+
+    /// Number of rows.
+    #[must_use]
+    pub fn rows(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// Number of stored weights.
+    #[must_use]
+    pub fn entries(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Row `i` as (columns, weights).
+    #[must_use]
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let r = self.offsets[i] as usize..self.offsets[i + 1] as usize;
+        (&self.cols[r.clone()], &self.weights[r])
+    }
+
+    /// Adds one entry to the row being built.
+    pub fn push(&mut self, col: u32, weight: f64) {
+        self.cols.push(col);
+        self.weights.push(weight);
+    }
+
+    /// Closes the row being built.
+    pub fn end_row(&mut self) {
+        self.offsets.push(crate::mesh::to_u32(self.cols.len()));
+    }
+
+    /// Appends all rows of `other`.
+    pub fn append(&mut self, other: &Self) {
+        let base = *self.offsets.last().expect("offsets start at 0");
+        self.offsets
+            .extend(other.offsets[1..].iter().map(|o| o + base));
+        self.cols.extend_from_slice(&other.cols);
+        self.weights.extend_from_slice(&other.weights);
+    }
+
+    /// Concatenates tables built in parallel chunks, in order.
+    #[must_use]
+    pub fn concat(parts: Vec<Self>) -> Self {
+        let mut all = Self::new();
+        for p in &parts {
+            all.append(p);
+        }
+        all
+    }
+
+    /// The weighted sum of row `i` over `src`.
+    #[must_use]
+    pub fn gather<T: Primvar>(&self, i: usize, src: &[T]) -> T {
+        let (cols, weights) = self.row(i);
+        let mut acc = T::zero();
+        for (&c, &w) in cols.iter().zip(weights) {
+            acc.add_scaled(&src[c as usize], w);
+        }
+        acc
+    }
+
+    /// `dst[i] = Σ w · src[col]` for every row, in parallel.
+    pub fn apply<T: Primvar>(&self, src: &[T], dst: &mut [T]) {
+        assert_eq!(dst.len(), self.rows(), "destination length");
+        dst.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(chunk, out)| {
+                let base = chunk * CHUNK;
+                for (k, d) in out.iter_mut().enumerate() {
+                    *d = self.gather(base + k, src);
+                }
+            });
+    }
+
+    /// Memory held, in bytes.
+    #[must_use]
+    pub fn bytes(&self) -> usize {
+        self.offsets.len() * 4 + self.cols.len() * 4 + self.weights.len() * 8
+    }
+}

@@ -1,0 +1,483 @@
+//! Connectivity tables of one refinement level, after OpenSubdiv's `Vtr::Level`.
+//!
+//! A [`Level`] holds the face→vertex and face→edge relations, edge→vertex and edge→face,
+//! vertex→face and vertex→edge, all flat (CSR offsets + `u32` items), plus the per-component
+//! tags that subdivision needs: sharpness (single precision, as OpenSubdiv), boundary and
+//! non-manifold flags, holes and each vertex's [`Rule`].
+//!
+//! Around a manifold vertex, faces and edges are ordered counter-clockwise: face `i` lies
+//! between edge `i` (its leading edge, leaving the vertex) and edge `i + 1`; on a boundary the
+//! order starts at the boundary edge that leads its face. Limit tangents depend on this order.
+//!
+//! Level 0 is built from a [`Mesh`] here ([`Level::from_mesh`]): edges are numbered in order of
+//! first appearance walking the faces, non-manifold edges (more than two faces, or two faces
+//! that disagree on orientation) and vertices (bow-ties, isolated vertices, anything that cannot
+//! be ordered) are found, and OpenSubdiv's sharpening is applied (`TopologyRefinerFactory`):
+//! boundary and non-manifold edges become infinitely sharp, as do non-manifold vertices except
+//! on an interior non-manifold crease, and topological corners with edge-and-corner boundaries.
+//! Child levels are built by [`crate::refine`].
+
+use crate::mesh::{Mesh, to_u32};
+use crate::options::BoundaryInterpolation;
+use crate::rules::crease::{self, INFINITE, Rule};
+
+/// A compressed sparse row table: row `i` is `items[offsets[i]..offsets[i + 1]]`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Csr {
+    /// Row starts; one more than the number of rows.
+    pub offsets: Vec<u32>,
+    /// All rows' items, row after row.
+    pub items: Vec<u32>,
+}
+
+impl Csr {
+    /// Row `i`.
+    #[must_use]
+    pub fn row(&self, i: usize) -> &[u32] {
+        &self.items[self.range(i)]
+    }
+
+    /// The item range of row `i`.
+    #[must_use]
+    pub fn range(&self, i: usize) -> std::ops::Range<usize> {
+        self.offsets[i] as usize..self.offsets[i + 1] as usize
+    }
+
+    /// Number of rows.
+    #[must_use]
+    pub fn rows(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// A table with the given row lengths, items zeroed.
+    pub(crate) fn with_counts(counts: impl IntoIterator<Item = u32>) -> Self {
+        let mut offsets = vec![0u32];
+        let mut total = 0u32;
+        for c in counts {
+            total += c;
+            offsets.push(total);
+        }
+        Self {
+            items: vec![0; total as usize],
+            offsets,
+        }
+    }
+}
+
+/// One level of a refinement hierarchy.
+#[derive(Clone, Debug, Default)]
+pub struct Level {
+    /// Number of vertices.
+    pub vertex_count: usize,
+    /// Face → vertices (counter-clockwise loops).
+    pub face_verts: Csr,
+    /// Face → edges, parallel to `face_verts`: edge `j` joins corners `j` and `j + 1`.
+    pub face_edges: Vec<u32>,
+    /// Edge → its two vertices.
+    pub edge_verts: Vec<[u32; 2]>,
+    /// Edge → incident faces.
+    pub edge_faces: Csr,
+    /// Position of the edge within each incident face, parallel to `edge_faces.items`.
+    pub edge_face_local: Vec<u32>,
+    /// Vertex → incident faces (ordered around manifold vertices).
+    pub vert_faces: Csr,
+    /// Corner index of the vertex within each incident face, parallel to `vert_faces.items`.
+    pub vert_face_local: Vec<u32>,
+    /// Vertex → incident edges (ordered around manifold vertices).
+    pub vert_edges: Csr,
+    /// Edge sharpness (0 smooth, ≥ 10 infinite).
+    pub edge_sharpness: Vec<f32>,
+    /// Vertex sharpness.
+    pub vertex_sharpness: Vec<f32>,
+    /// Non-manifold edges.
+    pub edge_nonmanifold: Vec<bool>,
+    /// Non-manifold vertices.
+    pub vertex_nonmanifold: Vec<bool>,
+    /// Hole faces.
+    pub face_hole: Vec<bool>,
+    /// The rule of each vertex.
+    pub vertex_rule: Vec<Rule>,
+}
+
+impl Level {
+    /// Number of faces.
+    #[must_use]
+    pub fn face_count(&self) -> usize {
+        self.face_verts.rows()
+    }
+
+    /// Number of edges.
+    #[must_use]
+    pub fn edge_count(&self) -> usize {
+        self.edge_verts.len()
+    }
+
+    /// Edges with a single face.
+    #[must_use]
+    pub fn is_boundary_edge(&self, e: usize) -> bool {
+        self.edge_faces.range(e).len() < 2
+    }
+
+    /// The vertex at the far end of edge `e` from `v`.
+    #[must_use]
+    pub fn other_end(&self, e: u32, v: u32) -> u32 {
+        let [a, b] = self.edge_verts[e as usize];
+        if a == v { b } else { a }
+    }
+
+    /// Builds level 0 from a validated mesh: topology, non-manifold detection, tags and
+    /// OpenSubdiv's boundary and non-manifold sharpening.
+    #[must_use]
+    pub fn from_mesh(mesh: &Mesh) -> Self {
+        let mut level = Self {
+            vertex_count: mesh.vertex_count(),
+            face_verts: Csr {
+                offsets: mesh.face_offsets().to_vec(),
+                items: mesh.face_vertices().to_vec(),
+            },
+            ..Self::default()
+        };
+        level.build_edges();
+        level.build_incidence();
+        level.orient_vertices();
+        level.apply_tags(mesh);
+        level
+    }
+
+    /// Numbers the edges in order of first appearance and fills `face_edges`, flagging edges
+    /// shared by more than two faces or by two faces of opposite winding as non-manifold.
+    fn build_edges(&mut self) {
+        let nv = self.vertex_count;
+        // Each vertex keeps the edges it starts (as the smaller index); at most two per corner.
+        let mut corners = vec![0u32; nv];
+        for &v in &self.face_verts.items {
+            corners[v as usize] += 2;
+        }
+        let mut slots = Csr::with_counts(corners);
+        let mut fill = vec![0u32; nv];
+        let mut edge_face_count: Vec<u32> = Vec::new();
+        self.face_edges = vec![0; self.face_verts.items.len()];
+        for f in 0..self.face_count() {
+            let range = self.face_verts.range(f);
+            let fv = &self.face_verts.items[range.clone()];
+            for j in 0..fv.len() {
+                let (a, b) = (fv[j], fv[(j + 1) % fv.len()]);
+                let (lo, hi) = (a.min(b), a.max(b));
+                let start = slots.offsets[lo as usize] as usize;
+                let known = &slots.items[start..start + fill[lo as usize] as usize];
+                let found = known.iter().copied().find(|&e| {
+                    let [p, q] = self.edge_verts[e as usize];
+                    p.max(q) == hi
+                });
+                let e = match found {
+                    Some(e) => {
+                        let ei = e as usize;
+                        if edge_face_count[ei] > 1 || self.edge_verts[ei][0] == a {
+                            self.edge_nonmanifold[ei] = true;
+                        }
+                        edge_face_count[ei] += 1;
+                        e
+                    }
+                    None => {
+                        let e = to_u32(self.edge_verts.len());
+                        self.edge_verts.push([a, b]);
+                        self.edge_nonmanifold.push(false);
+                        edge_face_count.push(1);
+                        slots.items[start + fill[lo as usize] as usize] = e;
+                        fill[lo as usize] += 1;
+                        e
+                    }
+                };
+                self.face_edges[range.start + j] = e;
+            }
+        }
+    }
+
+    /// Fills edge→faces, vertex→faces and vertex→edges in the order OpenSubdiv first builds
+    /// them (faces in face order, edges in edge order).
+    fn build_incidence(&mut self) {
+        let (nv, ne) = (self.vertex_count, self.edge_count());
+        let mut ef = vec![0u32; ne];
+        let mut vf = vec![0u32; nv];
+        let mut ve = vec![0u32; nv];
+        for &e in &self.face_edges {
+            ef[e as usize] += 1;
+        }
+        for &v in &self.face_verts.items {
+            vf[v as usize] += 1;
+        }
+        for &[a, b] in &self.edge_verts {
+            ve[a as usize] += 1;
+            ve[b as usize] += 1;
+        }
+        self.edge_faces = Csr::with_counts(ef);
+        self.edge_face_local = vec![0; self.edge_faces.items.len()];
+        self.vert_faces = Csr::with_counts(vf);
+        self.vert_face_local = vec![0; self.vert_faces.items.len()];
+        self.vert_edges = Csr::with_counts(ve);
+        let mut ef_fill = self.edge_faces.offsets[..ne].to_vec();
+        let mut vf_fill = self.vert_faces.offsets[..nv].to_vec();
+        let mut ve_fill = self.vert_edges.offsets[..nv].to_vec();
+        for f in 0..self.face_count() {
+            let range = self.face_verts.range(f);
+            for (j, corner) in range.enumerate() {
+                let e = self.face_edges[corner] as usize;
+                let slot = ef_fill[e] as usize;
+                self.edge_faces.items[slot] = to_u32(f);
+                self.edge_face_local[slot] = to_u32(j);
+                ef_fill[e] += 1;
+                let v = self.face_verts.items[corner] as usize;
+                let slot = vf_fill[v] as usize;
+                self.vert_faces.items[slot] = to_u32(f);
+                self.vert_face_local[slot] = to_u32(j);
+                vf_fill[v] += 1;
+            }
+        }
+        for (e, &[a, b]) in self.edge_verts.iter().enumerate() {
+            for v in [a as usize, b as usize] {
+                self.vert_edges.items[ve_fill[v] as usize] = to_u32(e);
+                ve_fill[v] += 1;
+            }
+        }
+    }
+
+    /// Orders faces and edges counter-clockwise around every vertex that touches no
+    /// non-manifold edge; a vertex that cannot be ordered is non-manifold
+    /// (`Vtr::Level::orderVertexFacesAndEdges`).
+    fn orient_vertices(&mut self) {
+        self.vertex_nonmanifold = vec![false; self.vertex_count];
+        for (e, &[a, b]) in self.edge_verts.iter().enumerate() {
+            if self.edge_nonmanifold[e] {
+                self.vertex_nonmanifold[a as usize] = true;
+                self.vertex_nonmanifold[b as usize] = true;
+            }
+        }
+        let mut faces = Vec::new();
+        let mut edges = Vec::new();
+        for v in 0..self.vertex_count {
+            if self.vertex_nonmanifold[v] {
+                continue;
+            }
+            if self.order_vertex(v, &mut faces, &mut edges) {
+                let fr = self.vert_faces.range(v);
+                for (slot, &f) in fr.zip(&faces) {
+                    self.vert_faces.items[slot] = f;
+                    self.vert_face_local[slot] = self.corner_of(f as usize, to_u32(v));
+                }
+                let er = self.vert_edges.range(v);
+                self.vert_edges.items[er].copy_from_slice(&edges);
+            } else {
+                self.vertex_nonmanifold[v] = true;
+            }
+        }
+    }
+
+    /// The corner index of vertex `v` in face `f`.
+    fn corner_of(&self, f: usize, v: u32) -> u32 {
+        let fv = self.face_verts.row(f);
+        to_u32(fv.iter().position(|&x| x == v).expect("vertex not in face"))
+    }
+
+    fn order_vertex(&self, v: usize, faces: &mut Vec<u32>, edges: &mut Vec<u32>) -> bool {
+        let v_faces = self.vert_faces.row(v);
+        let v_edges = self.vert_edges.row(v);
+        let (nf, ne) = (v_faces.len(), v_edges.len());
+        faces.clear();
+        edges.clear();
+        if nf == 0 || ne < 2 || ne > nf + 1 {
+            return false;
+        }
+        let vi = to_u32(v);
+        let leading = |f: u32| {
+            let c = self.corner_of(f as usize, vi) as usize;
+            (
+                c,
+                self.face_edges[self.face_verts.offsets[f as usize] as usize + c],
+            )
+        };
+        let (mut face, mut corner, mut edge);
+        if ne == nf {
+            face = v_faces[0];
+            (corner, edge) = leading(face);
+        } else {
+            // Start at the boundary edge that leads its face.
+            let start = v_edges.iter().find_map(|&e| {
+                let ef = self.edge_faces.row(e as usize);
+                (ef.len() == 1 && leading(ef[0]).1 == e).then_some(ef[0])
+            });
+            let Some(f) = start else { return false };
+            face = f;
+            (corner, edge) = leading(face);
+        }
+        faces.push(face);
+        edges.push(edge);
+        let first = edge;
+        while edges.len() < ne {
+            let fr = self.face_verts.range(face as usize);
+            let prev = if corner == 0 {
+                fr.len() - 1
+            } else {
+                corner - 1
+            };
+            let next = self.face_edges[fr.start + prev];
+            if next == edge || next == first {
+                return false;
+            }
+            edges.push(next);
+            if faces.len() < nf {
+                let ef = self.edge_faces.row(next as usize);
+                if ef.is_empty() || (ef.len() == 1 && ef[0] == face) {
+                    return false;
+                }
+                face = if ef[0] == face { ef[1] } else { ef[0] };
+                let fe = &self.face_edges[self.face_verts.range(face as usize)];
+                corner = fe
+                    .iter()
+                    .position(|&x| x == next)
+                    .expect("edge not in face");
+                faces.push(face);
+            }
+            edge = next;
+        }
+        // A bow-tie can pass the walk with the right counts but other faces left out.
+        let mut sorted = faces.clone();
+        sorted.sort_unstable();
+        let mut expect = v_faces.to_vec();
+        expect.sort_unstable();
+        sorted == expect
+    }
+
+    /// Applies the mesh's tags and OpenSubdiv's sharpening rules, then assigns vertex rules
+    /// (`TopologyRefinerFactoryBase::prepareComponentTagsAndSharpness`).
+    fn apply_tags(&mut self, mesh: &Mesh) {
+        let options = mesh.options;
+        self.edge_sharpness = vec![0.0; self.edge_count()];
+        self.vertex_sharpness = vec![0.0; self.vertex_count];
+        self.face_hole = vec![false; self.face_count()];
+        for c in mesh.creases() {
+            let [a, b] = c.vertices;
+            if let Some(e) = self.find_edge(a, b) {
+                self.edge_sharpness[e] = c.sharpness as f32;
+            }
+        }
+        for c in mesh.corners() {
+            self.vertex_sharpness[c.vertex as usize] = c.sharpness as f32;
+        }
+        for &h in mesh.holes() {
+            self.face_hole[h as usize] = true;
+        }
+        for e in 0..self.edge_count() {
+            if self.is_boundary_edge(e) || self.edge_nonmanifold[e] {
+                self.edge_sharpness[e] = INFINITE;
+            }
+        }
+        for v in 0..self.vertex_count {
+            let edges = self.vert_edges.row(v);
+            let count =
+                |pred: &dyn Fn(usize) -> bool| edges.iter().filter(|&&e| pred(e as usize)).count();
+            let boundary = count(&|e| self.is_boundary_edge(e));
+            let nonmanifold = count(&|e| self.edge_nonmanifold[e]);
+            let faces = self.vert_faces.range(v).len();
+            let topological_corner = faces == 1 && edges.len() == 2;
+            if topological_corner && options.boundary == BoundaryInterpolation::EdgeAndCorner {
+                self.vertex_sharpness[v] = INFINITE;
+            } else if self.vertex_nonmanifold[v] {
+                let nonmanifold_crease = nonmanifold == 2 && boundary == 0 && faces > edges.len();
+                if !nonmanifold_crease {
+                    self.vertex_sharpness[v] = INFINITE;
+                }
+            }
+            if options.boundary == BoundaryInterpolation::None && boundary > 0 {
+                for &f in self.vert_faces.row(v) {
+                    self.face_hole[f as usize] = true;
+                }
+            }
+        }
+        self.assign_rules();
+    }
+
+    /// Recomputes every vertex's rule from the current sharpness values.
+    pub(crate) fn assign_rules(&mut self) {
+        self.vertex_rule = (0..self.vertex_count)
+            .map(|v| {
+                let sharp = self
+                    .vert_edges
+                    .row(v)
+                    .iter()
+                    .filter(|&&e| crease::is_sharp(self.edge_sharpness[e as usize]))
+                    .count();
+                Rule::of(self.vertex_sharpness[v], sharp)
+            })
+            .collect();
+    }
+
+    /// The edge joining `a` and `b`, if any.
+    #[must_use]
+    pub fn find_edge(&self, a: u32, b: u32) -> Option<usize> {
+        self.vert_edges
+            .row(a as usize)
+            .iter()
+            .map(|&e| e as usize)
+            .find(|&e| self.edge_verts[e].contains(&b) && (a != b))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Point;
+
+    fn grid(n: usize) -> Mesh {
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                p.push(Point::new(i as f64, j as f64, 0.0));
+            }
+        }
+        let idx = |i: usize, j: usize| to_u32(j * (n + 1) + i);
+        let faces: Vec<[u32; 4]> = (0..n)
+            .flat_map(|j| {
+                (0..n).map(move |i| [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)])
+            })
+            .collect();
+        Mesh::from_polygons(p, &faces).unwrap()
+    }
+
+    #[test]
+    fn grid_topology_counts_and_order() {
+        let level = Level::from_mesh(&grid(2));
+        assert_eq!(level.edge_count(), 12);
+        assert_eq!(level.vertex_count, 9);
+        // The centre vertex is interior, valence 4, ordered so that face i lies between
+        // edge i and edge i + 1.
+        let v = 4;
+        let faces = level.vert_faces.row(v);
+        let edges = level.vert_edges.row(v);
+        assert_eq!(faces.len(), 4);
+        for i in 0..4 {
+            let f = faces[i] as usize;
+            let fe = &level.face_edges[level.face_verts.range(f)];
+            assert!(fe.contains(&edges[i]) && fe.contains(&edges[(i + 1) % 4]));
+        }
+        assert!(level.vertex_nonmanifold.iter().all(|&n| !n));
+        assert_eq!(level.vertex_rule[v], Rule::Smooth);
+        assert_eq!(level.vertex_rule[1], Rule::Crease);
+        assert_eq!(level.vertex_rule[0], Rule::Crease);
+    }
+
+    #[test]
+    fn bow_tie_is_non_manifold() {
+        let p = vec![
+            Point::new(0.0, 0.0, 0.0),
+            Point::new(1.0, 0.0, 0.0),
+            Point::new(0.0, 1.0, 0.0),
+            Point::new(-1.0, 0.0, 0.0),
+            Point::new(0.0, -1.0, 0.0),
+        ];
+        let mesh = Mesh::from_polygons(p, &[[0u32, 1, 2], [0, 3, 4]]).unwrap();
+        let level = Level::from_mesh(&mesh);
+        assert!(level.vertex_nonmanifold[0]);
+        assert_eq!(level.vertex_sharpness[0], INFINITE);
+        assert_eq!(level.vertex_rule[0], Rule::Corner);
+    }
+}
