@@ -3,7 +3,11 @@
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
+
+mod info;
+mod output;
+mod subdivide;
 
 /// Subdivision-surface cloth for animated characters (DeRose, Kass & Truong 1998).
 #[derive(Parser)]
@@ -14,12 +18,25 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Refine an OBJ control mesh with Catmull-Clark subdivision, exactly as OpenSubdiv does.
+    Subdivide(subdivide::Args),
+    /// Describe a control mesh: counts, histograms, boundaries, creases, holes.
+    Info(info::Args),
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: anyhow::Result<ExitCode> = match cli.command {
-        None => Ok(ExitCode::SUCCESS),
+        Some(Command::Subdivide(args)) => subdivide::run(&args),
+        Some(Command::Info(args)) => info::run(&args),
+        None => {
+            // The built-in demo arrives with the simulation pipeline; until then, the help.
+            Cli::command()
+                .print_help()
+                .map(|()| ExitCode::SUCCESS)
+                .map_err(Into::into)
+        }
     };
     match result {
         Ok(code) => code,

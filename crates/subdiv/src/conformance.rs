@@ -155,7 +155,8 @@ fn faces_without_holes(mesh: &Mesh) -> Vec<Vec<u32>> {
 }
 
 /// Checks the refined control points and faces of `shape` at `level` against `reference`.
-#[must_use]
+/// # Errors
+/// The first mismatch, described.
 pub fn check_refined(shape: &Mesh, level: usize, reference: &Reference) -> Result<(), String> {
     let refiner = Refiner::new(shape, level);
     let points = refiner.refine(shape.positions());
@@ -173,7 +174,8 @@ pub fn check_refined(shape: &Mesh, level: usize, reference: &Reference) -> Resul
 }
 
 /// Checks limit positions and (where the reference has them) normals at level 1.
-#[must_use]
+/// # Errors
+/// The first mismatch, described.
 pub fn check_limit(shape: &Mesh, reference: &Reference) -> Result<(), String> {
     let refiner = Refiner::new(shape, 1);
     let points: Vec<_> = refiner

@@ -26,6 +26,6 @@ pub mod topology;
 
 pub use mesh::{Corner, Crease, FaceVarying, Mesh, MeshError, Point, SHARPNESS_INFINITE, Uv};
 pub use options::{BoundaryInterpolation, CreaseMethod, FVarLinear, Options, TriangleRule};
-pub use refiner::{Refiner, subdivide};
+pub use refiner::{Limit, Refiner, subdivide};
 pub use sparse::{Primvar, SparseRows};
 pub use stencil::StencilTable;

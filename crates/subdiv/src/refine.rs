@@ -424,11 +424,12 @@ fn vertex_weights(p: &Level, c: &Level, layout: ChildLayout, options: &Options) 
             &s.sizes,
             &mut s.edge,
         );
-        for (&f, &w) in faces.iter().zip(&s.edge.faces) {
-            out.push(face_point(f as usize), w);
-        }
+        // The ends first, then the face points, in OpenSubdiv's order of operations.
         for v in p.edge_verts[e] {
             out.push(v, s.edge.vertex);
+        }
+        for (&f, &w) in faces.iter().zip(&s.edge.faces) {
+            out.push(face_point(f as usize), w);
         }
     });
     let mut all = vertex_rows;

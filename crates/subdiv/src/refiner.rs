@@ -155,18 +155,29 @@ impl Refiner {
     }
 }
 
-/// Refines a mesh's positions and UVs to `levels` and returns the refined mesh and, when asked,
-/// the limit positions replacing the refined ones and the limit normals.
+/// The limit surface at the refined vertices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Limit {
+    /// Limit position of every refined vertex.
+    pub positions: Vec<Point>,
+    /// Unit limit normal of every refined vertex (zero where the surface has no tangent plane).
+    pub normals: Vec<Vector3<f64>>,
+}
+
+/// Refines a mesh's positions and UVs to `levels`, and evaluates the limit surface at the
+/// refined vertices when `limit` is set.
 #[must_use]
-pub fn subdivide(mesh: &Mesh, levels: usize, limit: bool) -> (Mesh, Option<Vec<Vector3<f64>>>) {
+pub fn subdivide(mesh: &Mesh, levels: usize, limit: bool) -> (Mesh, Option<Limit>) {
     let refiner = Refiner::new(mesh, levels);
-    let mut positions = refiner.refine(mesh.positions());
+    let positions = refiner.refine(mesh.positions());
     let uvs = None;
-    let normals = limit.then(|| {
+    let limit = limit.then(|| {
         let coords: Vec<Vector3<f64>> = positions.iter().map(|p| p.coords).collect();
         let (pos, normals) = refiner.limit_masks().evaluate(&coords);
-        positions = pos.into_iter().map(Point::from).collect();
-        normals
+        Limit {
+            positions: pos.into_iter().map(Point::from).collect(),
+            normals,
+        }
     });
-    (refiner.refined_mesh(positions, uvs), normals)
+    (refiner.refined_mesh(positions, uvs), limit)
 }

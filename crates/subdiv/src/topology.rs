@@ -366,6 +366,13 @@ impl Level {
         for &h in mesh.holes() {
             self.face_hole[h as usize] = true;
         }
+        // With boundary interpolation `none`, boundary edges the user did not make infinitely
+        // sharp turn their vertices' faces into holes (RULES.md, "Boundaries").
+        let explicit_infinite: Vec<bool> = self
+            .edge_sharpness
+            .iter()
+            .map(|&s| crease::is_infinite(s))
+            .collect();
         for e in 0..self.edge_count() {
             if self.is_boundary_edge(e) || self.edge_nonmanifold[e] {
                 self.edge_sharpness[e] = INFINITE;
@@ -387,7 +394,10 @@ impl Level {
                     self.vertex_sharpness[v] = INFINITE;
                 }
             }
-            if options.boundary == BoundaryInterpolation::None && boundary > 0 {
+            let open_boundary = edges
+                .iter()
+                .any(|&e| self.is_boundary_edge(e as usize) && !explicit_infinite[e as usize]);
+            if options.boundary == BoundaryInterpolation::None && open_boundary {
                 for &f in self.vert_faces.row(v) {
                     self.face_hole[f as usize] = true;
                 }

@@ -1,0 +1,26 @@
+//! The crate against OpenSubdiv 3.6.0's own output, on the subset of reference files carried in
+//! `tests/data/opensubdiv` (the full set lives in `../shared`; see the conformance example).
+//! Every refined vertex, face, limit point and normal must match in OpenSubdiv's order.
+
+use std::path::Path;
+
+#[test]
+fn refined_and_limit_points_match_opensubdiv() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/opensubdiv");
+    let outcomes = tailor_subdiv::conformance::run(&dir);
+    let checked: Vec<_> = outcomes
+        .iter()
+        .filter(|o| !o.name.starts_with("facevarying"))
+        .collect();
+    assert!(
+        checked.len() >= 50,
+        "reference subset missing: {} files",
+        checked.len()
+    );
+    let failures: Vec<String> = checked
+        .iter()
+        .filter(|o| o.failure.is_some())
+        .map(ToString::to_string)
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -1,0 +1,81 @@
+//! Atomic output: every file the tool writes appears whole or not at all.
+//!
+//! The content goes to a temporary file beside the destination (same directory, so the final
+//! rename stays on one file system), is flushed and synced, then renamed over the destination.
+//! An interrupted run leaves the previous file intact, never a half-written one.
+
+use std::fs::{self, File};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+
+/// Writes `path` atomically with the bytes `write` produces.
+///
+/// # Errors
+/// Any I/O error, with the path in the message; the temporary file is removed on failure.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+) -> Result<()> {
+    let tmp = temporary_path(path);
+    let result = (|| -> io::Result<()> {
+        let mut out = BufWriter::new(File::create(&tmp)?);
+        write(&mut out)?;
+        let file = out.into_inner().map_err(io::IntoInnerError::into_error)?;
+        file.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("writing {}", path.display()))
+}
+
+fn temporary_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+}
+
+/// Writes to `path`, or to standard output when `path` is `-`.
+///
+/// # Errors
+/// As [`write_atomically`].
+pub fn write_to(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+    if path.as_os_str() == "-" {
+        let stdout = io::stdout();
+        let mut lock = io::BufWriter::new(stdout.lock());
+        write(&mut lock)
+            .and_then(|()| lock.flush())
+            .context("writing standard output")
+    } else {
+        write_atomically(path, |w| write(w))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failed_write_keeps_the_old_file() {
+        let dir = std::env::temp_dir().join(format!("tailor-output-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("a.txt");
+        write_atomically(&path, |w| w.write_all(b"first")).unwrap();
+        let err = write_atomically(&path, |w| {
+            w.write_all(b"partial")?;
+            Err(io::Error::other("disk full"))
+        });
+        assert!(err.is_err());
+        assert_eq!(fs::read_to_string(&path).unwrap(), "first");
+        assert_eq!(
+            fs::read_dir(&dir).unwrap().count(),
+            1,
+            "temporary file left behind"
+        );
+        fs::remove_dir_all(&dir).unwrap();
+    }
+}

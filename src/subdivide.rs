@@ -1,0 +1,135 @@
+//! `tailor subdivide`: refine an OBJ control mesh the way OpenSubdiv does.
+//!
+//! Options come from the file's OpenSubdiv tags (`t interpolateboundary`, `t creasemethod`, ...)
+//! and the flags override them. The refined mesh keeps OpenSubdiv's vertex and face order, its
+//! UVs, and `t crease`/`t corner` lines for the sharpness left after refinement; hole faces are
+//! not written.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::str::FromStr;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use tailor_subdiv::{BoundaryInterpolation, CreaseMethod, FVarLinear, Mesh, TriangleRule, obj};
+
+use crate::output;
+
+/// Arguments of `tailor subdivide`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Control mesh (OBJ with optional OpenSubdiv `t` tags); `-` reads standard input.
+    pub input: PathBuf,
+    /// Refinement level (each level splits every face into quads, four per quad).
+    #[arg(short, long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=8))]
+    pub level: u32,
+    /// Output OBJ; `-` or absent writes standard output.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Move every vertex to its limit position.
+    #[arg(long)]
+    pub limit: bool,
+    /// Write limit normals (`vn`).
+    #[arg(long)]
+    pub normals: bool,
+    /// Boundary interpolation: none, edge-only, edge-and-corner.
+    #[arg(long, value_parser = parse::<BoundaryInterpolation>)]
+    pub boundary: Option<BoundaryInterpolation>,
+    /// Semi-sharp crease decay: uniform, chaikin.
+    #[arg(long, value_parser = parse::<CreaseMethod>)]
+    pub crease_method: Option<CreaseMethod>,
+    /// Edge rule next to triangles: catmark, smooth.
+    #[arg(long, value_parser = parse::<TriangleRule>)]
+    pub triangle_rule: Option<TriangleRule>,
+    /// Face-varying (UV) interpolation: none, corners-only, corners-plus1, corners-plus2,
+    /// boundaries, all.
+    #[arg(long, value_parser = parse::<FVarLinear>)]
+    pub fvar_linear: Option<FVarLinear>,
+    /// The faces are clockwise (left-handed): reverse them on reading.
+    #[arg(long)]
+    pub left_handed: bool,
+}
+
+fn parse<T: FromStr<Err = tailor_subdiv::options::UnknownOption>>(s: &str) -> Result<T, String> {
+    s.parse()
+        .map_err(|e: tailor_subdiv::options::UnknownOption| e.to_string())
+}
+
+/// Faces beyond which a refinement is refused rather than exhausting memory.
+const MAX_FACES: usize = 200_000_000;
+
+/// Reads a control mesh from a file, or standard input for `-`.
+pub fn read_mesh(path: &Path) -> Result<obj::ObjDocument> {
+    if path.as_os_str() == "-" {
+        let mut text = String::new();
+        std::io::stdin()
+            .read_to_string(&mut text)
+            .context("reading standard input")?;
+        Ok(obj::parse(&text, "<stdin>")?)
+    } else {
+        Ok(obj::read(path)?)
+    }
+}
+
+/// Runs the command.
+///
+/// # Errors
+/// Unreadable or invalid input, an output that cannot be written, a refinement too large.
+pub fn run(args: &Args) -> Result<ExitCode> {
+    let start = Instant::now();
+    let mut mesh = read_mesh(&args.input)?.mesh;
+    if args.left_handed {
+        mesh = mesh.with_reversed_faces();
+    }
+    apply_overrides(&mut mesh, args);
+    let level = args.level as usize;
+    let faces_out = refined_face_count(&mesh, level);
+    if faces_out > MAX_FACES {
+        bail!(
+            "level {level} would make {faces_out} faces from {}; the limit is {MAX_FACES}",
+            args.input.display()
+        );
+    }
+    let (mut refined, limit) = tailor_subdiv::subdivide(&mesh, level, args.limit || args.normals);
+    let normals = match limit {
+        Some(limit) => {
+            if args.limit {
+                refined.set_positions(&limit.positions)?;
+            }
+            args.normals.then_some(limit.normals)
+        }
+        None => None,
+    };
+    let out = args.output.clone().unwrap_or_else(|| PathBuf::from("-"));
+    output::write_to(&out, |w| {
+        obj::write(&refined, normals.as_deref(), &mut { w })
+    })?;
+    let written = refined.face_count() - refined.holes().len();
+    eprintln!(
+        "{}: {} faces -> {} faces (level {level}) in {:.1} ms",
+        args.input.display(),
+        mesh.face_count(),
+        written,
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn apply_overrides(mesh: &mut Mesh, args: &Args) {
+    let o = &mut mesh.options;
+    o.boundary = args.boundary.unwrap_or(o.boundary);
+    o.crease_method = args.crease_method.unwrap_or(o.crease_method);
+    o.triangle_rule = args.triangle_rule.unwrap_or(o.triangle_rule);
+    o.fvar_linear = args.fvar_linear.unwrap_or(o.fvar_linear);
+}
+
+/// Faces after `level` refinements: an n-gon makes n quads, each quad four per level after.
+fn refined_face_count(mesh: &Mesh, level: usize) -> usize {
+    if level == 0 {
+        return mesh.face_count();
+    }
+    mesh.face_vertices()
+        .len()
+        .saturating_mul(4usize.saturating_pow(level as u32 - 1))
+}
