@@ -18,7 +18,12 @@ fn tailor(args: &[&str], stdin: Option<&str>) -> Output {
         .spawn()
         .expect("run tailor");
     if let Some(text) = stdin {
-        child.stdin.take().unwrap().write_all(text.as_bytes()).unwrap();
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(text.as_bytes())
+            .unwrap();
     }
     drop(child.stdin.take());
     child.wait_with_output().unwrap()
@@ -26,7 +31,10 @@ fn tailor(args: &[&str], stdin: Option<&str>) -> Output {
 
 fn shape(name: &str) -> String {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    root.join("crates/subdiv/tests/data/opensubdiv/shapes").join(name).display().to_string()
+    root.join("crates/subdiv/tests/data/opensubdiv/shapes")
+        .join(name)
+        .display()
+        .to_string()
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -36,27 +44,56 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn golden(name: &str, produced: &[u8]) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden")
+        .join(name);
     if std::env::var_os("TAILOR_BLESS").is_some() {
         fs::write(&path, produced).unwrap();
     }
-    let expected = fs::read(&path).unwrap_or_else(|_| panic!("missing golden file {}", path.display()));
-    assert!(expected == produced, "{name} differs from its golden file (TAILOR_BLESS=1 regenerates)");
+    let expected =
+        fs::read(&path).unwrap_or_else(|_| panic!("missing golden file {}", path.display()));
+    assert!(
+        expected == produced,
+        "{name} differs from its golden file (TAILOR_BLESS=1 regenerates)"
+    );
 }
 
 #[test]
 fn creased_cube_level_two_matches_golden() {
     let out = scratch("cube_creases1_l2.obj");
-    let o = tailor(&["subdivide", &shape("catmark_cube_creases1.obj"), "-l", "2", "-o", out.to_str().unwrap()], None);
+    let o = tailor(
+        &[
+            "subdivide",
+            &shape("catmark_cube_creases1.obj"),
+            "-l",
+            "2",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        None,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary = String::from_utf8_lossy(&o.stderr);
-    assert!(summary.contains("6 faces -> 96 faces (level 2)"), "{summary}");
+    assert!(
+        summary.contains("6 faces -> 96 faces (level 2)"),
+        "{summary}"
+    );
     golden("cube_creases1_l2.obj", &fs::read(out).unwrap());
 }
 
 #[test]
 fn limit_surface_with_normals_matches_golden() {
-    let o = tailor(&["subdivide", &shape("catmark_edgecorner.obj"), "-l", "1", "--limit", "--normals"], None);
+    let o = tailor(
+        &[
+            "subdivide",
+            &shape("catmark_edgecorner.obj"),
+            "-l",
+            "1",
+            "--limit",
+            "--normals",
+        ],
+        None,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     golden("edgecorner_l1_limit.obj", &o.stdout);
 }
@@ -65,10 +102,26 @@ fn limit_surface_with_normals_matches_golden() {
 fn flags_override_tags_and_stdin_works() {
     let text = fs::read_to_string(shape("catmark_edgecorner.obj")).unwrap();
     let tagged = tailor(&["subdivide", "-", "-l", "1"], Some(&text));
-    let overridden = tailor(&["subdivide", "-", "-l", "1", "--boundary", "edge-only"], Some(&text));
+    let overridden = tailor(
+        &["subdivide", "-", "-l", "1", "--boundary", "edge-only"],
+        Some(&text),
+    );
     assert!(tagged.status.success() && overridden.status.success());
-    assert_ne!(tagged.stdout, overridden.stdout, "--boundary must change the edge-and-corner shape");
-    let o = tailor(&["subdivide", &shape("catmark_edgecorner.obj"), "-l", "1", "--boundary", "edge-only"], None);
+    assert_ne!(
+        tagged.stdout, overridden.stdout,
+        "--boundary must change the edge-and-corner shape"
+    );
+    let o = tailor(
+        &[
+            "subdivide",
+            &shape("catmark_edgecorner.obj"),
+            "-l",
+            "1",
+            "--boundary",
+            "edge-only",
+        ],
+        None,
+    );
     assert_eq!(o.stdout, overridden.stdout);
 }
 
@@ -87,7 +140,15 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
     let o = tailor(&["subdivide", "missing.obj"], None);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing.obj"));
-    let o = tailor(&["subdivide", &shape("catmark_cube.obj"), "--crease-method", "sharp"], None);
+    let o = tailor(
+        &[
+            "subdivide",
+            &shape("catmark_cube.obj"),
+            "--crease-method",
+            "sharp",
+        ],
+        None,
+    );
     assert_eq!(o.status.code(), Some(2), "usage errors exit 2");
 }
 
@@ -95,7 +156,10 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
 fn failed_run_keeps_the_previous_output() {
     let out = scratch("kept.obj");
     fs::write(&out, "previous").unwrap();
-    let o = tailor(&["subdivide", "-", "-o", out.to_str().unwrap()], Some("v 0 0 nan\nf 1 1 1\n"));
+    let o = tailor(
+        &["subdivide", "-", "-o", out.to_str().unwrap()],
+        Some("v 0 0 nan\nf 1 1 1\n"),
+    );
     assert_eq!(o.status.code(), Some(1));
     assert_eq!(fs::read_to_string(&out).unwrap(), "previous");
 }

@@ -317,25 +317,34 @@ fn child_vertex_edges(p: &Level, layout: ChildLayout, c: &mut Level) {
         }
     }
     for e in 0..ne {
+        // Order as (edge half, face edge, edge half, face edges...), the first half being the
+        // one the first incident face reaches first (OpenSubdiv's counter-clockwise order).
         let faces = p.edge_faces.range(e);
-        let start = slot;
-        let mut list = [half(e, 0), half(e, 1)].to_vec();
-        for (i, idx) in faces.enumerate() {
+        let face_edge = |idx: usize| {
             let (f, l) = (
                 p.edge_faces.items[idx] as usize,
                 p.edge_face_local[idx] as usize,
             );
-            list.push(to_u32(p.face_verts.offsets[f] as usize + l));
-            if i == 0 {
-                // Order as (edge half, face edge, edge half, ...) following the first face.
-                if p.face_verts.items[p.face_verts.offsets[f] as usize + l] == p.edge_verts[e][0] {
-                    list.swap(0, 1);
-                }
-                list.swap(1, 2);
+            let corner = p.face_verts.offsets[f] as usize + l;
+            (to_u32(corner), p.face_verts.items[corner])
+        };
+        let out = &mut c.vert_edges.items[slot..slot + 2 + faces.len()];
+        if faces.is_empty() {
+            out.copy_from_slice(&[half(e, 0), half(e, 1)]);
+        } else {
+            let (first, corner) = face_edge(faces.start);
+            let forward = corner == p.edge_verts[e][0];
+            let (a, b) = if forward {
+                (half(e, 1), half(e, 0))
+            } else {
+                (half(e, 0), half(e, 1))
+            };
+            out[..3].copy_from_slice(&[a, first, b]);
+            for (k, idx) in faces.skip(1).enumerate() {
+                out[3 + k] = face_edge(idx).0;
             }
         }
-        c.vert_edges.items[start..start + list.len()].copy_from_slice(&list);
-        slot += list.len();
+        slot += out.len();
     }
 }
 
@@ -382,60 +391,92 @@ fn child_tags(p: &Level, layout: ChildLayout, method: CreaseMethod, c: &mut Leve
 fn vertex_weights(p: &Level, c: &Level, layout: ChildLayout, options: &Options) -> SparseRows {
     let np = p.vertex_count;
     let face_point = |f: usize| to_u32(np + layout.faces + f);
-    let rows = |range: std::ops::Range<usize>,
-                row: &(dyn Fn(usize, &mut Scratch, &mut SparseRows) + Sync)| {
-        let chunks: Vec<SparseRows> = range
-            .clone()
-            .step_by(CHUNK)
-            .collect::<Vec<_>>()
-            .into_par_iter()
-            .map(|start| {
-                let mut out = SparseRows::new();
-                let mut scratch = Scratch::default();
-                for i in start..(start + CHUNK).min(range.end) {
-                    row(i, &mut scratch, &mut out);
-                    out.end_row();
-                }
-                out
-            })
-            .collect();
-        SparseRows::concat(chunks)
+    let (nv, nf) = (p.vertex_count, p.face_count());
+    // Every row has a fixed length from the topology (weights a rule does not use are zero),
+    // so the table is filled in place, in parallel.
+    let length = |i: usize| {
+        if i < nv {
+            p.vert_faces.range(i).len() + p.vert_edges.range(i).len() + 1
+        } else if i < nv + nf {
+            p.face_verts.range(i - nv).len()
+        } else {
+            2 + p.edge_faces.range(i - nv - nf).len()
+        }
     };
-    let vertex_rows = rows(0..p.vertex_count, &|v, s, out| {
-        vertex_row(p, c, options.crease_method, v, &face_point, s, out);
-    });
-    let face_rows = rows(0..p.face_count(), &|f, _, out| {
-        let fv = p.face_verts.row(f);
-        let w = 1.0 / fv.len() as f64;
-        for &v in fv {
-            out.push(v, w);
-        }
-    });
-    let edge_rows = rows(0..p.edge_count(), &|e, s, out| {
-        let faces = p.edge_faces.row(e);
-        s.sizes.clear();
-        s.sizes
-            .extend(faces.iter().map(|&f| p.face_verts.range(f as usize).len()));
-        let child_rule = c.vertex_rule[layout.of_edge(e) as usize];
-        masks::edge_point(
-            options.triangle_rule,
-            p.edge_sharpness[e],
-            child_rule,
-            &s.sizes,
-            &mut s.edge,
+    thread_local! {
+        static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+    }
+    SparseRows::from_lengths(nv + nf + p.edge_count(), length, |i, cols, weights| {
+        SCRATCH.with_borrow_mut(|s| {
+            let mut row = Row {
+                cols,
+                weights,
+                next: 0,
+            };
+            if i < nv {
+                vertex_row(p, c, options.crease_method, i, &face_point, s, &mut row);
+            } else if i < nv + nf {
+                let fv = p.face_verts.row(i - nv);
+                let w = 1.0 / fv.len() as f64;
+                for &v in fv {
+                    row.push(v, w);
+                }
+            } else {
+                edge_row(p, c, layout, options, i - nv - nf, &face_point, s, &mut row);
+            }
+            debug_assert_eq!(row.next, row.cols.len());
+        });
+    })
+}
+
+/// A row being written in place.
+struct Row<'a> {
+    cols: &'a mut [u32],
+    weights: &'a mut [f64],
+    next: usize,
+}
+
+impl Row<'_> {
+    fn push(&mut self, col: u32, weight: f64) {
+        self.cols[self.next] = col;
+        self.weights[self.next] = weight;
+        self.next += 1;
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn edge_row(
+    p: &Level,
+    c: &Level,
+    layout: ChildLayout,
+    options: &Options,
+    e: usize,
+    face_point: &dyn Fn(usize) -> u32,
+    s: &mut Scratch,
+    out: &mut Row<'_>,
+) {
+    let faces = p.edge_faces.row(e);
+    s.sizes.clear();
+    s.sizes
+        .extend(faces.iter().map(|&f| p.face_verts.range(f as usize).len()));
+    let child_rule = c.vertex_rule[layout.of_edge(e) as usize];
+    masks::edge_point(
+        options.triangle_rule,
+        p.edge_sharpness[e],
+        child_rule,
+        &s.sizes,
+        &mut s.edge,
+    );
+    // The ends first, then the face points, in OpenSubdiv's order of operations.
+    for v in p.edge_verts[e] {
+        out.push(v, s.edge.vertex);
+    }
+    for (k, &f) in faces.iter().enumerate() {
+        out.push(
+            face_point(f as usize),
+            s.edge.faces.get(k).copied().unwrap_or(0.0),
         );
-        // The ends first, then the face points, in OpenSubdiv's order of operations.
-        for v in p.edge_verts[e] {
-            out.push(v, s.edge.vertex);
-        }
-        for (&f, &w) in faces.iter().zip(&s.edge.faces) {
-            out.push(face_point(f as usize), w);
-        }
-    });
-    let mut all = vertex_rows;
-    all.append(&face_rows);
-    all.append(&edge_rows);
-    all
+    }
 }
 
 #[derive(Default)]
@@ -455,7 +496,7 @@ fn vertex_row(
     v: usize,
     face_point: &dyn Fn(usize) -> u32,
     s: &mut Scratch,
-    out: &mut SparseRows,
+    out: &mut Row<'_>,
 ) {
     let edges = p.vert_edges.row(v);
     let corners = p.face_verts.items.len();
@@ -478,15 +519,17 @@ fn vertex_row(
     };
     masks::vertex_point(method, &hood, &mut s.mask, &mut s.blend);
     // Smaller weights first, as OpenSubdiv applies them: faces, edges, then the vertex.
-    for (&f, &w) in p.vert_faces.row(v).iter().zip(&s.mask.faces) {
-        if w != 0.0 {
-            out.push(face_point(f as usize), w);
-        }
+    for (k, &f) in p.vert_faces.row(v).iter().enumerate() {
+        out.push(
+            face_point(f as usize),
+            s.mask.faces.get(k).copied().unwrap_or(0.0),
+        );
     }
-    for (&e, &w) in edges.iter().zip(&s.mask.edges) {
-        if w != 0.0 {
-            out.push(p.other_end(e, to_u32(v)), w);
-        }
+    for (k, &e) in edges.iter().enumerate() {
+        out.push(
+            p.other_end(e, to_u32(v)),
+            s.mask.edges.get(k).copied().unwrap_or(0.0),
+        );
     }
     out.push(to_u32(v), s.mask.vertex);
 }

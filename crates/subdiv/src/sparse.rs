@@ -99,6 +99,49 @@ impl SparseRows {
         (&self.cols[r.clone()], &self.weights[r])
     }
 
+    /// Builds a table whose row lengths are known in advance, filling rows in parallel
+    /// straight into their final place (no per-chunk buffers, no copies).
+    ///
+    /// `fill(row, cols, weights)` must write every slot of its row.
+    pub fn from_lengths(
+        rows: usize,
+        length: impl Fn(usize) -> usize,
+        fill: impl Fn(usize, &mut [u32], &mut [f64]) + Sync,
+    ) -> Self {
+        let mut offsets = Vec::with_capacity(rows + 1);
+        let mut total = 0usize;
+        offsets.push(0);
+        for r in 0..rows {
+            total += length(r);
+            offsets.push(crate::mesh::to_u32(total));
+        }
+        let mut cols = vec![0u32; total];
+        let mut weights = vec![0.0f64; total];
+        // Cut the flat arrays at chunk boundaries so each task owns its rows' slices.
+        let mut tasks = Vec::with_capacity(rows.div_ceil(CHUNK));
+        let (mut c_rest, mut w_rest) = (cols.as_mut_slice(), weights.as_mut_slice());
+        for start in (0..rows).step_by(CHUNK) {
+            let end = (start + CHUNK).min(rows);
+            let len = (offsets[end] - offsets[start]) as usize;
+            let (c, cr) = c_rest.split_at_mut(len);
+            let (w, wr) = w_rest.split_at_mut(len);
+            (c_rest, w_rest) = (cr, wr);
+            tasks.push((start, end, c, w));
+        }
+        tasks.into_par_iter().for_each(|(start, end, c, w)| {
+            let base = offsets[start] as usize;
+            for r in start..end {
+                let range = offsets[r] as usize - base..offsets[r + 1] as usize - base;
+                fill(r, &mut c[range.clone()], &mut w[range]);
+            }
+        });
+        Self {
+            offsets,
+            cols,
+            weights,
+        }
+    }
+
     /// Adds one entry to the row being built.
     pub fn push(&mut self, col: u32, weight: f64) {
         self.cols.push(col);
@@ -119,10 +162,17 @@ impl SparseRows {
         self.weights.extend_from_slice(&other.weights);
     }
 
-    /// Concatenates tables built in parallel chunks, in order.
+    /// Concatenates tables built in parallel chunks, in order, with one allocation per array.
     #[must_use]
     pub fn concat(parts: Vec<Self>) -> Self {
-        let mut all = Self::new();
+        let rows: usize = parts.iter().map(Self::rows).sum();
+        let entries: usize = parts.iter().map(Self::entries).sum();
+        let mut all = Self {
+            offsets: Vec::with_capacity(rows + 1),
+            cols: Vec::with_capacity(entries),
+            weights: Vec::with_capacity(entries),
+        };
+        all.offsets.push(0);
         for p in &parts {
             all.append(p);
         }
