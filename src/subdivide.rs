@@ -96,6 +96,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         Some(limit) => {
             if args.limit {
                 refined.set_positions(&limit.positions)?;
+                if let Some(uvs) = limit.uvs {
+                    refined = refined.with_uvs(uvs)?;
+                }
             }
             args.normals.then_some(limit.normals)
         }

@@ -108,11 +108,25 @@ impl fmt::Display for Outcome {
     }
 }
 
-/// Compares vectors coordinate by coordinate; returns the first mismatch.
+/// Largest accepted difference for limit UVs, which the reference computed in single
+/// precision.
+pub const SINGLE_TOLERANCE: f64 = 1e-6;
+
+/// Compares vectors coordinate by coordinate within [`TOLERANCE`]; returns the first mismatch.
 fn compare<const N: usize>(
     what: &str,
     ours: &[[f64; N]],
     theirs: &[[f64; N]],
+) -> Result<(), String> {
+    compare_within(what, ours, theirs, TOLERANCE)
+}
+
+/// Compares vectors coordinate by coordinate within `tolerance` (relative above magnitude 1).
+fn compare_within<const N: usize>(
+    what: &str,
+    ours: &[[f64; N]],
+    theirs: &[[f64; N]],
+    tolerance: f64,
 ) -> Result<(), String> {
     if ours.len() != theirs.len() {
         return Err(format!(
@@ -124,7 +138,7 @@ fn compare<const N: usize>(
     for (i, (a, b)) in ours.iter().zip(theirs).enumerate() {
         for k in 0..N {
             let scale = a[k].abs().max(b[k].abs()).max(1.0);
-            if (a[k] - b[k]).abs() > TOLERANCE * scale || a[k].is_nan() != b[k].is_nan() {
+            if (a[k] - b[k]).abs() > tolerance * scale || a[k].is_nan() != b[k].is_nan() {
                 return Err(format!("{what} {i}: {a:?} vs reference {b:?}"));
             }
         }
@@ -146,12 +160,27 @@ pub fn read_shape(path: &Path) -> Result<Mesh, String> {
     })
 }
 
-fn faces_without_holes(mesh: &Mesh) -> Vec<Vec<u32>> {
+/// Per-corner items (vertex or UV indices, parallel to the mesh's face vertices) of every face
+/// that is not a hole, face by face.
+fn faces_without_holes(mesh: &Mesh, corners: &[u32]) -> Vec<Vec<u32>> {
     let holes: std::collections::HashSet<u32> = mesh.holes().iter().copied().collect();
     (0..mesh.face_count())
         .filter(|&f| !holes.contains(&crate::mesh::to_u32(f)))
-        .map(|f| mesh.face(f).to_vec())
+        .map(|f| corners[mesh.face_range(f)].to_vec())
         .collect()
+}
+
+/// Compares refined UVs, value by value and face corner by face corner (`f v/vt`).
+fn check_uvs(mesh: &Mesh, reference: &Reference) -> Result<(), String> {
+    let uvs = mesh
+        .uvs()
+        .ok_or("the reference has UVs, the shape has none")?;
+    let ours: Vec<[f64; 2]> = uvs.values.iter().map(|t| [t.x, t.y]).collect();
+    compare("uvs", &ours, &reference.uvs)?;
+    if faces_without_holes(mesh, &uvs.indices) != reference.face_uvs {
+        return Err("face UV indices differ".into());
+    }
+    Ok(())
 }
 
 /// Checks the refined control points and faces of `shape` at `level` against `reference`.
@@ -162,9 +191,16 @@ pub fn check_refined(shape: &Mesh, level: usize, reference: &Reference) -> Resul
     let points = refiner.refine(shape.positions());
     let ours: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
     compare("vertices", &ours, &reference.positions)?;
-    let mesh = refiner.refined_mesh(points, None);
-    if faces_without_holes(&mesh) != reference.faces {
+    let uvs = match shape.uvs() {
+        Some(uvs) if !reference.uvs.is_empty() => refiner.refine_uvs(&uvs.values),
+        _ => None,
+    };
+    let mesh = refiner.refined_mesh(points, uvs);
+    if faces_without_holes(&mesh, mesh.face_vertices()) != reference.faces {
         return Err("faces differ".into());
+    }
+    if !reference.uvs.is_empty() {
+        check_uvs(&mesh, reference)?;
     }
     let stencils = refiner.stencils();
     let mut via_stencils = vec![crate::mesh::Point::origin(); stencils.len()];
@@ -189,6 +225,14 @@ pub fn check_limit(shape: &Mesh, reference: &Reference) -> Result<(), String> {
     if !reference.normals.is_empty() {
         let ours: Vec<[f64; 3]> = normals.iter().map(|n| [n.x, n.y, n.z]).collect();
         compare("limit normals", &ours, &reference.normals)?;
+    }
+    if let (Some(uvs), false) = (shape.uvs(), reference.uvs.is_empty()) {
+        let limit = refiner
+            .refine_uvs(&uvs.values)
+            .and_then(|refined| refiner.limit_uvs(&refined))
+            .ok_or("no UVs refined")?;
+        let ours: Vec<[f64; 2]> = limit.values.iter().map(|t| [t.x, t.y]).collect();
+        compare_within("limit uvs", &ours, &reference.uvs, SINGLE_TOLERANCE)?;
     }
     Ok(())
 }
@@ -256,8 +300,13 @@ fn check_file(dir: &Path, file: &Path) -> Result<(), String> {
         "refined" => check_refined(&shape, level, &reference),
         "limit" => check_limit(&shape, &reference),
         _ => {
-            let _ = mode;
-            Err("face-varying refinement is not implemented yet".into())
+            // The mode comes from the file name; the reference must carry UVs.
+            if reference.uvs.is_empty() {
+                return Err("no vt lines in the reference".into());
+            }
+            let mut shape = shape;
+            shape.options.fvar_linear = mode.ok_or("no face-varying mode in the file name")?;
+            check_refined(&shape, level, &reference)
         }
     }
 }

@@ -13,6 +13,7 @@
 #![warn(missing_docs)]
 
 pub mod conformance;
+pub mod fvar;
 pub mod limit;
 pub mod mesh;
 pub mod obj;

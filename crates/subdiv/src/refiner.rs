@@ -7,8 +7,9 @@
 
 use nalgebra::Vector3;
 
+use crate::fvar::FVarRefiner;
 use crate::limit::LimitMasks;
-use crate::mesh::{Corner, Crease, FaceVarying, Mesh, Point};
+use crate::mesh::{Corner, Crease, FaceVarying, Mesh, Point, Uv};
 use crate::options::{BoundaryInterpolation, Options};
 use crate::refine::Refinement;
 use crate::rules::crease;
@@ -22,6 +23,7 @@ pub struct Refiner {
     options: Options,
     base: Level,
     steps: Vec<Refinement>,
+    fvar: Option<FVarRefiner>,
 }
 
 impl Refiner {
@@ -35,11 +37,31 @@ impl Refiner {
             let parent = steps.last().map_or(&base, |s| &s.child);
             steps.push(Refinement::new(parent, &options));
         }
+        let fvar = mesh
+            .uvs()
+            .map(|uvs| FVarRefiner::new(mesh, uvs, &base, &steps));
         Self {
             options,
             base,
             steps,
+            fvar,
         }
+    }
+
+    /// Refines the control mesh's UVs (or other values with the same indices) to the last
+    /// level; `None` when the mesh has no UVs.
+    ///
+    /// # Panics
+    /// If `control` does not have as many values as the mesh's UVs.
+    #[must_use]
+    pub fn refine_uvs(&self, control: &[Uv]) -> Option<FaceVarying> {
+        self.fvar.as_ref().map(|f| f.refine(control))
+    }
+
+    /// The limit of UVs refined by [`Self::refine_uvs`]; `None` when the mesh has no UVs.
+    #[must_use]
+    pub fn limit_uvs(&self, refined: &FaceVarying) -> Option<FaceVarying> {
+        self.fvar.as_ref().map(|f| f.limit(self.last(), refined))
     }
 
     /// Number of refinement levels.
@@ -90,6 +112,20 @@ impl Refiner {
             table = table.refine(step);
         }
         table
+    }
+
+    /// Stencils of the limit positions and tangents of the last level's vertices over the
+    /// control points: evaluate with [`StencilTable::apply`] and take
+    /// [`crate::limit::normal`] of the two tangents.
+    #[must_use]
+    pub fn limit_stencils(&self) -> [StencilTable; 3] {
+        let refined = self.stencils();
+        let masks = self.limit_masks();
+        [
+            refined.then(&masks.position),
+            refined.then(&masks.tangent1),
+            refined.then(&masks.tangent2),
+        ]
     }
 
     /// Limit masks of the last level's vertices over that level's vertices.
@@ -162,6 +198,8 @@ pub struct Limit {
     pub positions: Vec<Point>,
     /// Unit limit normal of every refined vertex (zero where the surface has no tangent plane).
     pub normals: Vec<Vector3<f64>>,
+    /// Limit UVs, laid out as the refined UVs; `None` without UVs.
+    pub uvs: Option<FaceVarying>,
 }
 
 /// Refines a mesh's positions and UVs to `levels`, and evaluates the limit surface at the
@@ -170,13 +208,14 @@ pub struct Limit {
 pub fn subdivide(mesh: &Mesh, levels: usize, limit: bool) -> (Mesh, Option<Limit>) {
     let refiner = Refiner::new(mesh, levels);
     let positions = refiner.refine(mesh.positions());
-    let uvs = None;
+    let uvs = mesh.uvs().and_then(|uvs| refiner.refine_uvs(&uvs.values));
     let limit = limit.then(|| {
         let coords: Vec<Vector3<f64>> = positions.iter().map(|p| p.coords).collect();
         let (pos, normals) = refiner.limit_masks().evaluate(&coords);
         Limit {
             positions: pos.into_iter().map(Point::from).collect(),
             normals,
+            uvs: uvs.as_ref().and_then(|uvs| refiner.limit_uvs(uvs)),
         }
     });
     (refiner.refined_mesh(positions, uvs), limit)

@@ -177,3 +177,40 @@ fn results_do_not_depend_on_the_thread_count() {
     };
     assert_eq!(run(1), run(2));
 }
+
+#[test]
+fn scalar_fields_refine_like_coordinates() {
+    // Any per-vertex attribute (a stiffness map, say) follows the same rules as positions.
+    let mesh = bumpy_creased_cube();
+    let refiner = Refiner::new(&mesh, 2);
+    let field: Vec<f64> = mesh.positions().iter().map(|p| p.y).collect();
+    let refined_field = refiner.refine(&field);
+    for (f, p) in refined_field.iter().zip(refiner.refine(mesh.positions())) {
+        assert_eq!(*f, p.y);
+    }
+}
+
+#[test]
+fn limit_stencils_agree_with_limit_masks() {
+    let mesh = bumpy_creased_cube();
+    let refiner = Refiner::new(&mesh, 2);
+    let refined: Vec<Vector3<f64>> = refiner
+        .refine(mesh.positions())
+        .iter()
+        .map(|p| p.coords)
+        .collect();
+    let (pos, normals) = refiner.limit_masks().evaluate(&refined);
+    let [sp, s1, s2] = refiner.limit_stencils();
+    let control: Vec<Vector3<f64>> = mesh.positions().iter().map(|p| p.coords).collect();
+    let eval = |s: &tailor_subdiv::StencilTable| {
+        let mut out = vec![Vector3::zeros(); s.len()];
+        s.apply(&control, &mut out);
+        out
+    };
+    let (p2, t1, t2) = (eval(&sp), eval(&s1), eval(&s2));
+    for i in 0..pos.len() {
+        assert!((pos[i] - p2[i]).norm() < 1e-13);
+        let n = tailor_subdiv::limit::normal(&t1[i], &t2[i]);
+        assert!((normals[i] - n).norm() < 1e-9, "vertex {i}");
+    }
+}

@@ -358,8 +358,10 @@ mod tests {
             let total = 2.0 * m.vertex + m.faces.iter().sum::<f64>();
             assert!((total - 1.0).abs() < 1e-15, "{rule:?} {s}");
         }
+        // The blend weight is the single-precision sharpness, as in OpenSubdiv.
         edge_point(TriangleRule::Catmark, 0.3, Rule::Smooth, &[4, 4], &mut m);
-        assert!((m.vertex - (0.3 * 0.5 + 0.7 * 0.25)).abs() < 1e-15);
+        let p = f64::from(0.3f32);
+        assert_eq!(m.vertex, p * 0.5 + (1.0 - p) * 0.25);
     }
 
     #[test]
