@@ -5,8 +5,11 @@ use std::process::ExitCode;
 
 use clap::{CommandFactory, Parser, Subcommand};
 
+mod check;
 mod info;
 mod output;
+mod polymesh_obj;
+mod sequence;
 mod subdivide;
 
 /// Subdivision-surface cloth for animated characters (DeRose, Kass & Truong 1998).
@@ -23,6 +26,8 @@ enum Command {
     Subdivide(subdivide::Args),
     /// Describe a control mesh: counts, histograms, boundaries, creases, holes.
     Info(info::Args),
+    /// Check a simulated cloth (or a frame sequence) for body penetration and self-intersection.
+    Check(check::Args),
 }
 
 fn main() -> ExitCode {
@@ -30,6 +35,7 @@ fn main() -> ExitCode {
     let result: anyhow::Result<ExitCode> = match cli.command {
         Some(Command::Subdivide(args)) => subdivide::run(&args),
         Some(Command::Info(args)) => info::run(&args),
+        Some(Command::Check(args)) => check::run(&args),
         None => {
             // The built-in demo arrives with the simulation pipeline; until then, the help.
             Cli::command()

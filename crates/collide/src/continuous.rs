@@ -1,0 +1,183 @@
+//! Continuous collision queries over a step: every vertex–triangle and edge–edge pair that
+//! touches while the vertices move linearly from the start to the end positions of the last
+//! swept refit ([`Hierarchy::refit_swept`]), within one mesh or between two (Bridson, Fedkiw &
+//! Anderson 2002).
+//!
+//! The traversal pairs faces whose swept boxes overlap; a pair of faces `(f, g)` then tests the
+//! vertices *owned* by `f` against the triangles of `g` (and the reverse) and the edges owned by
+//! `f` against those owned by `g` (see [`crate::topology`]), so each pair of features is tested
+//! once. Within one mesh, pairs sharing a vertex are skipped, and the normal cones over the step
+//! ([`crate::cones`]) clear whole smooth regions.
+
+use crate::ccd::{CONTACT_SLACK, edge_edge, vertex_triangle};
+use crate::cones::NormalCones;
+use crate::hierarchy::Hierarchy;
+use crate::traverse::{cross_pairs, self_pairs};
+
+/// A vertex touching a triangle during the step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VertexTriangleImpact {
+    /// The vertex.
+    pub vertex: u32,
+    /// The fan triangle (index into [`Hierarchy::triangles`]).
+    pub triangle: u32,
+    /// First time of contact, as a fraction of the step in `[0, 1]`.
+    pub time: f64,
+    /// Barycentric coordinates of the contact on the triangle.
+    pub barycentric: [f64; 3],
+}
+
+/// Two edges touching during the step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EdgeEdgeImpact {
+    /// The two edges, each as its end vertices `[low, high]`.
+    pub edges: [[u32; 2]; 2],
+    /// First time of contact, as a fraction of the step in `[0, 1]`.
+    pub time: f64,
+    /// Where along each edge, from its low to its high vertex, in `[0, 1]`.
+    pub parameters: [f64; 2],
+}
+
+/// Everything that touches during a step, sorted.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Impacts {
+    /// Vertices of the first mesh against triangles of the second (of the mesh itself for a
+    /// self query), sorted by vertex then triangle.
+    pub vertex_triangle: Vec<VertexTriangleImpact>,
+    /// Vertices of the second mesh against triangles of the first (empty for a self query).
+    pub triangle_vertex: Vec<VertexTriangleImpact>,
+    /// Edges of the first mesh against edges of the second (for a self query, the lower edge
+    /// first), sorted by edges.
+    pub edge_edge: Vec<EdgeEdgeImpact>,
+}
+
+enum Found {
+    VertexTriangle(VertexTriangleImpact),
+    TriangleVertex(VertexTriangleImpact),
+    EdgeEdge(EdgeEdgeImpact),
+}
+
+impl Impacts {
+    fn from_found(found: Vec<Found>) -> Self {
+        let mut impacts = Impacts::default();
+        for f in found {
+            match f {
+                Found::VertexTriangle(i) => impacts.vertex_triangle.push(i),
+                Found::TriangleVertex(i) => impacts.triangle_vertex.push(i),
+                Found::EdgeEdge(i) => impacts.edge_edge.push(i),
+            }
+        }
+        for list in [&mut impacts.vertex_triangle, &mut impacts.triangle_vertex] {
+            list.sort_unstable_by_key(|i| (i.vertex, i.triangle));
+        }
+        impacts.edge_edge.sort_unstable_by_key(|i| i.edges);
+        impacts
+    }
+}
+
+impl Hierarchy {
+    /// Every vertex–triangle and edge–edge contact of the mesh with itself during the motion
+    /// of the last swept refit, excluding pairs that share a vertex.
+    #[must_use]
+    pub fn self_impacts(&self) -> Impacts {
+        let cones = NormalCones::new(self);
+        let visit = |a: u32, b: u32, out: &mut Vec<Found>| {
+            let (f, g) = (a.min(b), a.max(b));
+            vertices_against_face(self, f, self, g, true, Found::VertexTriangle, out);
+            if f != g {
+                vertices_against_face(self, g, self, f, true, Found::VertexTriangle, out);
+            }
+            edges_against_edges(self, f, self, g, true, out);
+        };
+        Impacts::from_found(self_pairs(self, Some(&cones), true, CONTACT_SLACK, &visit))
+    }
+
+    /// Every vertex–triangle and edge–edge contact between this mesh and `other` during the
+    /// motions of their last swept refits.
+    #[must_use]
+    pub fn impacts_with(&self, other: &Hierarchy) -> Impacts {
+        let visit = |f: u32, g: u32, out: &mut Vec<Found>| {
+            vertices_against_face(self, f, other, g, false, Found::VertexTriangle, out);
+            vertices_against_face(other, g, self, f, false, Found::TriangleVertex, out);
+            edges_against_edges(self, f, other, g, false, out);
+        };
+        Impacts::from_found(cross_pairs(self, other, CONTACT_SLACK, &visit))
+    }
+}
+
+/// The vertices owned by face `f` of `hv` against the triangles of face `g` of `ht`.
+fn vertices_against_face(
+    hv: &Hierarchy,
+    f: u32,
+    ht: &Hierarchy,
+    g: u32,
+    same_mesh: bool,
+    wrap: fn(VertexTriangleImpact) -> Found,
+    out: &mut Vec<Found>,
+) {
+    for &v in hv.topology.owned_vertices(f) {
+        let path = [hv.start[v as usize], hv.end()[v as usize]];
+        for t in ht.topology.face_triangles(g) {
+            let corners = ht.topology.triangles[t];
+            if same_mesh && corners.contains(&v) {
+                continue;
+            }
+            let triangle = corners.map(|c| [ht.start[c as usize], ht.end()[c as usize]]);
+            if let Some((time, barycentric)) = vertex_triangle(path, triangle) {
+                out.push(wrap(VertexTriangleImpact {
+                    vertex: v,
+                    triangle: t as u32,
+                    time,
+                    barycentric,
+                }));
+            }
+        }
+    }
+}
+
+/// The edges owned by face `f` of `ha` against those owned by face `g` of `hb`; within one
+/// face, each unordered pair once.
+fn edges_against_edges(
+    ha: &Hierarchy,
+    f: u32,
+    hb: &Hierarchy,
+    g: u32,
+    same_mesh: bool,
+    out: &mut Vec<Found>,
+) {
+    let (mine, theirs) = (ha.topology.owned_edges(f), hb.topology.owned_edges(g));
+    for (i, &ea) in mine.iter().enumerate() {
+        let theirs = if same_mesh && f == g {
+            &theirs[i + 1..]
+        } else {
+            theirs
+        };
+        for &eb in theirs {
+            let (a, b) = (
+                ha.topology.edges[ea as usize],
+                hb.topology.edges[eb as usize],
+            );
+            if same_mesh && a.iter().any(|v| b.contains(v)) {
+                continue;
+            }
+            // Within one mesh the lower edge goes first, so the same pair always gives the
+            // same bits whichever face owns which edge.
+            let (a, b, ha, hb) = if same_mesh && b < a {
+                (b, a, hb, ha)
+            } else {
+                (a, b, ha, hb)
+            };
+            let path = |h: &Hierarchy, v: u32| [h.start[v as usize], h.end()[v as usize]];
+            if let Some((time, parameters)) =
+                edge_edge(a.map(|v| path(ha, v)), b.map(|v| path(hb, v)))
+            {
+                let edges = [a, b];
+                out.push(Found::EdgeEdge(EdgeEdgeImpact {
+                    edges,
+                    time,
+                    parameters,
+                }));
+            }
+        }
+    }
+}

@@ -1,0 +1,276 @@
+//! Building the coarsening hierarchy (DeRose, Kass & Truong 1998, §5.1).
+//!
+//! Level 0 is the faces. At each level the adjacency graph of the current superfaces is matched
+//! greedily, cheapest pair first, where a pair costs the half-area of its merged bounding box at
+//! the build positions: compact pairs merge first, long slivers last. Every matched pair becomes a
+//! parent superface; an unmatched superface waits for the next level. Superfaces with no
+//! neighbour left (the last of a disconnected piece), and every unmatched one when a level merged
+//! fewer than two thirds of the superfaces, are paired with their neighbour in Morton order
+//! instead, so pieces join and the tree stays balanced: the count shrinks by at least a third per
+//! level, giving depth O(log n). Each level sorts its edges once, so the build is O(n log n).
+//!
+//! The boundary chain of a node is the boundary of the 2-chain of its oriented faces: its polygon
+//! edges, directed as the faces wind, with opposite edges cancelled. The normal-cone test
+//! ([`crate::cones`]) reads it to decide whether a superface can fold onto itself.
+
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
+use parry3d_f64::math::Vector as DVec3;
+
+use super::Hierarchy;
+use crate::topology::Topology;
+
+/// The shape of the tree: children of the internal nodes, and where each level starts.
+pub(super) struct Tree {
+    pub(super) children: Vec<[u32; 2]>,
+    pub(super) level_offsets: Vec<u32>,
+}
+
+/// Coarsens the faces of `topology` into a binary tree, preferring compact pairs at `positions`.
+pub(super) fn coarsen(topology: &Topology, positions: &[DVec3]) -> Tree {
+    let faces = topology.face_count();
+    let mut node: Vec<u32> = (0..faces as u32).collect();
+    let mut boxes: Vec<Aabb> = (0..faces as u32)
+        .map(|f| Aabb::from_points(topology.face(f).iter().map(|&v| positions[v as usize])))
+        .collect();
+    let whole = boxes.iter().skip(1).fold(boxes[0], |a, b| a.merged(b));
+    let mut edges = topology.adjacency.clone();
+    let mut children = Vec::with_capacity(faces.saturating_sub(1));
+    let mut level_offsets = vec![0u32];
+
+    while node.len() > 1 {
+        let count = node.len();
+        // Phase 1: greedy matching on the adjacency graph, compact pairs first.
+        let mut order: Vec<(f64, [u32; 2])> = edges
+            .iter()
+            .map(|&[a, b]| {
+                (
+                    boxes[a as usize].merged(&boxes[b as usize]).half_area(),
+                    [a, b],
+                )
+            })
+            .collect();
+        order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        let mut matched = vec![false; count];
+        let mut pairs = Vec::with_capacity(count / 2);
+        for (_, [a, b]) in order {
+            if !matched[a as usize] && !matched[b as usize] {
+                matched[a as usize] = true;
+                matched[b as usize] = true;
+                pairs.push([a, b]);
+            }
+        }
+
+        // Phase 2: pair the stranded superfaces by Morton order of their centres.
+        let mut degree = vec![0u32; count];
+        for &[a, b] in &edges {
+            degree[a as usize] += 1;
+            degree[b as usize] += 1;
+        }
+        let slow = pairs.len() * 3 < count;
+        let mut stranded: Vec<(u64, u32)> = (0..count as u32)
+            .filter(|&c| !matched[c as usize] && (slow || degree[c as usize] == 0))
+            .map(|c| (morton(boxes[c as usize].center(), &whole), c))
+            .collect();
+        stranded.sort_unstable();
+        for pair in stranded.chunks_exact(2) {
+            matched[pair[0].1 as usize] = true;
+            matched[pair[1].1 as usize] = true;
+            pairs.push([pair[0].1, pair[1].1]);
+        }
+
+        // Phase 3: the next level: new parents first, in the order of their first child (so
+        // nodes stay in mesh order, close in memory to their neighbours), then the superfaces
+        // that wait.
+        pairs.sort_unstable_by_key(|&[a, b]| a.min(b));
+        let mut next = vec![0u32; count];
+        let mut next_node = Vec::with_capacity(count - pairs.len());
+        let mut next_boxes = Vec::with_capacity(count - pairs.len());
+        for &[a, b] in &pairs {
+            next[a as usize] = next_node.len() as u32;
+            next[b as usize] = next_node.len() as u32;
+            next_node.push((faces + children.len()) as u32);
+            next_boxes.push(boxes[a as usize].merged(&boxes[b as usize]));
+            children.push([node[a as usize], node[b as usize]]);
+        }
+        for c in (0..count).filter(|&c| !matched[c]) {
+            next[c] = next_node.len() as u32;
+            next_node.push(node[c]);
+            next_boxes.push(boxes[c]);
+        }
+        level_offsets.push(children.len() as u32);
+
+        // Phase 4: the adjacency between the new superfaces.
+        edges = edges
+            .iter()
+            .map(|&[a, b]| (next[a as usize], next[b as usize]))
+            .filter(|(a, b)| a != b)
+            .map(|(a, b)| [a.min(b), a.max(b)])
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        node = next_node;
+        boxes = next_boxes;
+    }
+    Tree {
+        children,
+        level_offsets,
+    }
+}
+
+/// The Morton code (21 bits per axis) of `p` inside `whole`.
+fn morton(p: DVec3, whole: &Aabb) -> u64 {
+    let extent = (whole.maxs - whole.mins).max(DVec3::splat(f64::MIN_POSITIVE));
+    let unit = ((p - whole.mins) / extent).clamp(DVec3::ZERO, DVec3::ONE);
+    let spread = |x: f64| {
+        let mut v = (x * ((1u64 << 21) - 1) as f64) as u64;
+        v = (v | (v << 32)) & 0x001f_0000_0000_ffff;
+        v = (v | (v << 16)) & 0x001f_0000_ff00_00ff;
+        v = (v | (v << 8)) & 0x100f_00f0_0f00_f00f;
+        v = (v | (v << 4)) & 0x10c3_0c30_c30c_30c3;
+        (v | (v << 2)) & 0x1249_2492_4924_9249
+    };
+    spread(unit.x) | (spread(unit.y) << 1) | (spread(unit.z) << 2)
+}
+
+/// The boundary chain of every node, as CSR over nodes: a leaf's polygon edges in winding order,
+/// and for a parent the union of its children's chains with opposite edges cancelled.
+pub(super) fn boundary_chains(hierarchy: &Hierarchy) -> (Vec<u32>, Vec<[u32; 2]>) {
+    let faces = hierarchy.face_count();
+    let mut offsets = Vec::with_capacity(faces + hierarchy.children.len() + 1);
+    let mut chain = Vec::new();
+    offsets.push(0u32);
+    for f in 0..faces as u32 {
+        let corners = hierarchy.topology.face(f);
+        for (i, &v) in corners.iter().enumerate() {
+            chain.push([v, corners[(i + 1) % corners.len()]]);
+        }
+        offsets.push(chain.len() as u32);
+    }
+    let mut merged = Vec::new();
+    for &[a, b] in &hierarchy.children {
+        merged.clear();
+        for child in [a, b] {
+            let c = child as usize;
+            merged.extend_from_slice(&chain[offsets[c] as usize..offsets[c + 1] as usize]);
+        }
+        cancel_opposite(&mut merged);
+        chain.extend_from_slice(&merged);
+        offsets.push(chain.len() as u32);
+    }
+    (offsets, chain)
+}
+
+/// Cancels pairs of opposite directed edges (`a→b` with `b→a`), keeping the net multiplicity.
+fn cancel_opposite(edges: &mut Vec<[u32; 2]>) {
+    edges.sort_unstable_by_key(|&[a, b]| (a.min(b), a.max(b)));
+    let mut kept = Vec::with_capacity(edges.len());
+    for group in
+        edges.chunk_by(|x, y| (x[0].min(x[1]), x[0].max(x[1])) == (y[0].min(y[1]), y[0].max(y[1])))
+    {
+        let [low, high] = [group[0][0].min(group[0][1]), group[0][0].max(group[0][1])];
+        let net: i64 = group.iter().map(|e| if e[0] == low { 1 } else { -1 }).sum();
+        let edge = if net > 0 { [low, high] } else { [high, low] };
+        kept.extend(std::iter::repeat_n(edge, net.unsigned_abs() as usize));
+    }
+    *edges = kept;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Point;
+
+    /// An `n × n` grid of unit quads in the plane z = 0, plus optionally a detached copy.
+    fn grid(n: u32, copies: u32) -> (Vec<Point>, Vec<u32>, Vec<u32>) {
+        let (mut positions, mut offsets, mut corners) = (Vec::new(), vec![0], Vec::new());
+        for copy in 0..copies {
+            let base = positions.len() as u32;
+            for j in 0..=n {
+                for i in 0..=n {
+                    positions.push(Point::new(i as f64, j as f64, 10.0 * copy as f64));
+                }
+            }
+            for j in 0..n {
+                for i in 0..n {
+                    let v = base + j * (n + 1) + i;
+                    corners.extend([v, v + 1, v + n + 2, v + n + 1]);
+                    offsets.push(corners.len() as u32);
+                }
+            }
+        }
+        (positions, offsets, corners)
+    }
+
+    fn collect_leaves(h: &Hierarchy, node: u32, out: &mut Vec<u32>) {
+        match h.node_children(node) {
+            None => out.push(node),
+            Some([a, b]) => {
+                collect_leaves(h, a, out);
+                collect_leaves(h, b, out);
+            }
+        }
+    }
+
+    #[test]
+    fn every_face_is_one_leaf_under_the_root() {
+        for copies in [1, 3] {
+            let (p, o, c) = grid(16, copies);
+            let h = Hierarchy::build(&p, &o, &c).unwrap();
+            let mut leaves = Vec::new();
+            collect_leaves(&h, h.root(), &mut leaves);
+            leaves.sort_unstable();
+            assert_eq!(leaves, (0..h.face_count() as u32).collect::<Vec<_>>());
+            assert_eq!(h.leaf_counts[h.root() as usize] as usize, h.face_count());
+            // The depth-first numbering gives every node exactly its own faces.
+            for node in 0..=h.root() {
+                let mut below = Vec::new();
+                collect_leaves(&h, node, &mut below);
+                assert_eq!(h.leaves_below(node), below.as_slice());
+            }
+        }
+    }
+
+    #[test]
+    fn grid_hierarchy_is_balanced() {
+        let (p, o, c) = grid(32, 1);
+        let h = Hierarchy::build(&p, &o, &c).unwrap();
+        // 1024 faces: log2 = 10; greedy matching leaves a few faces waiting.
+        assert!(h.depth() >= 10 && h.depth() <= 14, "depth {}", h.depth());
+    }
+
+    #[test]
+    fn root_boundary_of_a_grid_is_its_rim() {
+        let (p, o, c) = grid(4, 1);
+        let h = Hierarchy::build(&p, &o, &c).unwrap();
+        let rim = h.node_boundary(h.root());
+        assert_eq!(rim.len(), 16);
+        // The rim is one closed loop: every vertex starts exactly one edge and ends one.
+        let mut starts: Vec<u32> = rim.iter().map(|e| e[0]).collect();
+        let mut ends: Vec<u32> = rim.iter().map(|e| e[1]).collect();
+        starts.sort_unstable();
+        ends.sort_unstable();
+        assert_eq!(starts, ends);
+    }
+
+    #[test]
+    fn closed_surface_has_no_root_boundary() {
+        // A tetrahedron, consistently oriented.
+        let p = [
+            Point::new(0.0, 0.0, 0.0),
+            Point::new(1.0, 0.0, 0.0),
+            Point::new(0.0, 1.0, 0.0),
+            Point::new(0.0, 0.0, 1.0),
+        ];
+        let c = [0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2];
+        let h = Hierarchy::build(&p, &[0, 3, 6, 9, 12], &c).unwrap();
+        assert!(h.node_boundary(h.root()).is_empty());
+    }
+
+    #[test]
+    fn morton_orders_along_each_axis() {
+        let whole = Aabb::new(DVec3::ZERO, DVec3::ONE);
+        for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+            assert!(morton(axis * 0.25, &whole) < morton(axis * 0.75, &whole));
+        }
+    }
+}

@@ -1,0 +1,276 @@
+//! The coarsening hierarchy of DeRose, Kass & Truong (1998, §5): a binary tree over the faces of
+//! a polygon mesh whose shape depends only on the topology.
+//!
+//! Nodes are numbered so that a flat, bottom-up pass is a plain loop: leaves `0..F` are the faces
+//! (node `f` is face `f`), internal node `F + i` has children `children[i]`, and internal nodes are
+//! stored level by level, so every child precedes its parent and the root is the last node. All
+//! per-node data (boxes, leaf counts, boundary chains) are flat arrays indexed by node, and a
+//! depth-first numbering of the faces makes the faces below any node one contiguous slice.
+//! [`build`] makes the tree, [`refit`] the boxes.
+
+mod build;
+mod refit;
+
+use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::math::Vector as DVec3;
+use rayon::prelude::*;
+
+use crate::Point;
+use crate::convert::to_glam;
+use crate::error::CollideError;
+use crate::topology::Topology;
+
+/// Below this many nodes a level is refit on one thread.
+const PARALLEL_MIN: usize = 512;
+
+/// A coarsening hierarchy over a polygon mesh, with the boxes of its last refit.
+///
+/// Build it once per topology with [`Hierarchy::build`], then call [`Hierarchy::refit`] (or
+/// [`Hierarchy::refit_swept`] for continuous queries) whenever the vertices move. Queries read
+/// the positions of the last refit.
+#[derive(Clone, Debug)]
+pub struct Hierarchy {
+    pub(crate) topology: Topology,
+    /// Children of internal node `F + i`.
+    pub(crate) children: Vec<[u32; 2]>,
+    /// Internal nodes of level `k` are `F + level_offsets[k] .. F + level_offsets[k + 1]`.
+    pub(crate) level_offsets: Vec<u32>,
+    /// Number of faces below each node.
+    pub(crate) leaf_counts: Vec<u32>,
+    /// The faces in depth-first order: node `n` covers `leaf_order[leaf_first[n]..][..leaf_counts[n]]`.
+    leaf_order: Vec<u32>,
+    leaf_first: Vec<u32>,
+    /// CSR over nodes: the directed boundary edges of each node's faces (see [`build`]).
+    pub(crate) boundary_offsets: Vec<u32>,
+    pub(crate) boundary: Vec<[u32; 2]>,
+    /// One box per node, from the last refit.
+    pub(crate) boxes: Vec<Aabb>,
+    /// Positions of the last refit; for a swept refit, at the start of the step.
+    pub(crate) start: Vec<DVec3>,
+    /// Positions at the end of the step of a swept refit; empty after a static refit.
+    end: Vec<DVec3>,
+}
+
+impl Hierarchy {
+    /// Builds the hierarchy of a polygon mesh given as CSR faces, and refits it at `positions`.
+    ///
+    /// `positions` also guide the coarsening (compact superfaces are preferred), so pass a
+    /// representative pose such as the rest pose; the tree stays valid for any later positions.
+    ///
+    /// # Errors
+    /// [`CollideError`] when there are no faces, the CSR tables are inconsistent, a face is
+    /// shorter than a triangle, repeats a vertex or names a missing vertex, or a position is not
+    /// finite.
+    pub fn build(
+        positions: &[Point],
+        face_offsets: &[u32],
+        face_vertices: &[u32],
+    ) -> Result<Self, CollideError> {
+        let topology = Topology::new(positions.len(), face_offsets, face_vertices)?;
+        let start = to_glam_checked(positions, positions.len())?;
+        let tree = build::coarsen(&topology, &start);
+        let mut hierarchy = Self {
+            topology,
+            children: tree.children,
+            level_offsets: tree.level_offsets,
+            leaf_counts: Vec::new(),
+            leaf_order: Vec::new(),
+            leaf_first: Vec::new(),
+            boundary_offsets: Vec::new(),
+            boundary: Vec::new(),
+            boxes: Vec::new(),
+            start,
+            end: Vec::new(),
+        };
+        hierarchy.leaf_counts = hierarchy.fold_up(|_| 1, |a, b| a + b);
+        hierarchy.order_leaves();
+        (hierarchy.boundary_offsets, hierarchy.boundary) = build::boundary_chains(&hierarchy);
+        hierarchy.refit_boxes(0.0);
+        Ok(hierarchy)
+    }
+
+    /// Number of faces (leaves).
+    #[must_use]
+    pub fn face_count(&self) -> usize {
+        self.topology.face_count()
+    }
+
+    /// Number of fan triangles the faces split into.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.topology.triangles.len()
+    }
+
+    /// Number of vertices the mesh was built with.
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.topology.vertex_count
+    }
+
+    /// Number of levels above the leaves: about `log2` of the face count.
+    #[must_use]
+    pub fn depth(&self) -> usize {
+        self.level_offsets.len() - 1
+    }
+
+    /// The fan triangles (vertex triples, counter-clockwise as the faces), in face order.
+    #[must_use]
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.topology.triangles
+    }
+
+    /// The face each fan triangle belongs to.
+    #[must_use]
+    pub fn triangle_faces(&self) -> &[u32] {
+        &self.topology.triangle_face
+    }
+
+    /// Number of fan triangles of zero area at the positions of the last refit; the exact tests
+    /// skip them.
+    #[must_use]
+    pub fn degenerate_triangles(&self) -> usize {
+        (0..self.triangle_count())
+            .into_par_iter()
+            .filter(|&t| crate::triangle::is_degenerate(self.triangle_at(t, self.end())))
+            .count()
+    }
+
+    /// Whether the last refit was swept (its end positions differ from its start).
+    pub(crate) fn is_swept(&self) -> bool {
+        !self.end.is_empty()
+    }
+
+    /// The current positions: those of a static refit, or the end of a swept one.
+    pub(crate) fn end(&self) -> &[DVec3] {
+        if self.is_swept() {
+            &self.end
+        } else {
+            &self.start
+        }
+    }
+
+    /// Numbers the faces depth-first, so the faces below any node are contiguous.
+    fn order_leaves(&mut self) {
+        let faces = self.face_count();
+        self.leaf_first = vec![0; faces + self.children.len()];
+        for (i, &[a, b]) in self.children.iter().enumerate().rev() {
+            let first = self.leaf_first[faces + i];
+            self.leaf_first[a as usize] = first;
+            self.leaf_first[b as usize] = first + self.leaf_counts[a as usize];
+        }
+        self.leaf_order = vec![0; faces];
+        for f in 0..faces {
+            self.leaf_order[self.leaf_first[f] as usize] = f as u32;
+        }
+    }
+
+    /// The faces below `node`.
+    pub(crate) fn leaves_below(&self, node: u32) -> &[u32] {
+        let n = node as usize;
+        let first = self.leaf_first[n] as usize;
+        &self.leaf_order[first..first + self.leaf_counts[n] as usize]
+    }
+
+    /// The node id of the root.
+    pub(crate) fn root(&self) -> u32 {
+        (self.face_count() + self.children.len() - 1) as u32
+    }
+
+    /// The children of `node`, or `None` for a leaf.
+    pub(crate) fn node_children(&self, node: u32) -> Option<[u32; 2]> {
+        let f = self.face_count() as u32;
+        (node >= f).then(|| self.children[(node - f) as usize])
+    }
+
+    /// The boundary chain of `node`.
+    pub(crate) fn node_boundary(&self, node: u32) -> &[[u32; 2]] {
+        let n = node as usize;
+        &self.boundary[self.boundary_offsets[n] as usize..self.boundary_offsets[n + 1] as usize]
+    }
+
+    /// The corners of fan triangle `t` at `positions`.
+    pub(crate) fn triangle_at(&self, t: usize, positions: &[DVec3]) -> [DVec3; 3] {
+        self.topology.triangles[t].map(|v| positions[v as usize])
+    }
+
+    /// Computes one value per node bottom-up: `leaf(f)` for face `f`, then `merge` of the two
+    /// children, one level at a time, each level in parallel. O(n); the result does not depend
+    /// on the thread count.
+    pub(crate) fn fold_up<T: Copy + Send + Sync>(
+        &self,
+        leaf: impl Fn(u32) -> T + Sync,
+        merge: impl Fn(&T, &T) -> T + Sync,
+    ) -> Vec<T> {
+        let mut out = Vec::new();
+        self.fold_up_into(&mut out, leaf, merge);
+        out
+    }
+
+    /// [`Hierarchy::fold_up`] into an existing buffer, reusing its allocation.
+    pub(crate) fn fold_up_into<T: Copy + Send + Sync>(
+        &self,
+        out: &mut Vec<T>,
+        leaf: impl Fn(u32) -> T + Sync,
+        merge: impl Fn(&T, &T) -> T + Sync,
+    ) {
+        let faces = self.face_count();
+        (0..faces as u32)
+            .into_par_iter()
+            .with_min_len(PARALLEL_MIN)
+            .map(&leaf)
+            .collect_into_vec(out);
+        out.resize(faces + self.children.len(), out[0]);
+        for level in self.level_offsets.windows(2) {
+            let (lo, hi) = (level[0] as usize, level[1] as usize);
+            let (done, rest) = out.split_at_mut(faces + lo);
+            rest[..hi - lo]
+                .par_iter_mut()
+                .with_min_len(PARALLEL_MIN)
+                .zip(&self.children[lo..hi])
+                .for_each(|(o, &[a, b])| *o = merge(&done[a as usize], &done[b as usize]));
+        }
+    }
+}
+
+/// Converts positions to glam, checking their count and that they are finite.
+pub(crate) fn to_glam_checked(
+    positions: &[Point],
+    expected: usize,
+) -> Result<Vec<DVec3>, CollideError> {
+    let mut out = Vec::new();
+    convert_into(positions, expected, &mut out)?;
+    Ok(out)
+}
+
+/// Converts positions to glam into `out` (reusing its allocation), checking their count and
+/// that they are finite.
+pub(crate) fn convert_into(
+    positions: &[Point],
+    expected: usize,
+    out: &mut Vec<DVec3>,
+) -> Result<(), CollideError> {
+    if positions.len() != expected {
+        return Err(CollideError::PositionCount {
+            expected,
+            given: positions.len(),
+        });
+    }
+    if let Some(vertex) = positions
+        .iter()
+        .position(|p| !p.coords.iter().all(|c| c.is_finite()))
+    {
+        return Err(CollideError::NonFinitePosition { vertex });
+    }
+    out.clear();
+    out.extend(positions.iter().map(to_glam));
+    Ok(())
+}
+
+/// Checks that a distance parameter is a number `>= 0` (infinity allowed).
+pub(crate) fn check_distance(what: &'static str, value: f64) -> Result<(), CollideError> {
+    if value >= 0.0 {
+        Ok(())
+    } else {
+        Err(CollideError::BadDistance { what, value })
+    }
+}

@@ -1,0 +1,285 @@
+//! Connectivity tables of a polygon mesh, built once per topology.
+//!
+//! Faces arrive as CSR (`face_offsets`, `face_vertices`), the layout of `tailor_subdiv::Mesh`.
+//! Each polygon `v0 v1 … vk` is fan-triangulated into `(v0, vi, vi+1)`, so face `f` owns the
+//! triangles `face_offsets[f] - 2f .. face_offsets[f+1] - 2(f+1)`; the exact tests run on those
+//! triangles and their edges (polygon edges and fan diagonals).
+//!
+//! For continuous collision every vertex and every edge is *owned* by the first face that uses it
+//! (Bridson, Fedkiw & Anderson 2002 test each vertex–triangle and edge–edge pair once): a pair of
+//! leaves `(f, g)` then tests the features owned by `f` against those of `g`, and no pair of
+//! features is ever tested twice.
+
+use crate::error::CollideError;
+
+/// Validated faces with their fan triangles, edges and feature owners. All tables are flat.
+#[derive(Clone, Debug)]
+pub(crate) struct Topology {
+    pub(crate) vertex_count: usize,
+    pub(crate) face_offsets: Vec<u32>,
+    pub(crate) face_vertices: Vec<u32>,
+    /// Fan triangles, in face order.
+    pub(crate) triangles: Vec<[u32; 3]>,
+    /// The face each triangle belongs to.
+    pub(crate) triangle_face: Vec<u32>,
+    /// Unique undirected triangle edges `[low, high]`, sorted.
+    pub(crate) edges: Vec<[u32; 2]>,
+    /// How many triangles use each edge (2 everywhere on a closed manifold).
+    pub(crate) edge_triangle_count: Vec<u32>,
+    /// Pairs of distinct faces sharing an edge, `f < g`, sorted and unique.
+    pub(crate) adjacency: Vec<[u32; 2]>,
+    /// CSR: the vertices each face owns.
+    pub(crate) owned_vertex_offsets: Vec<u32>,
+    pub(crate) owned_vertices: Vec<u32>,
+    /// CSR: the edges (indices into `edges`) each face owns.
+    pub(crate) owned_edge_offsets: Vec<u32>,
+    pub(crate) owned_edges: Vec<u32>,
+}
+
+impl Topology {
+    /// Validates the CSR faces against `vertex_count` and builds every table.
+    pub(crate) fn new(
+        vertex_count: usize,
+        face_offsets: &[u32],
+        face_vertices: &[u32],
+    ) -> Result<Self, CollideError> {
+        validate(vertex_count, face_offsets, face_vertices)?;
+        let face_count = face_offsets.len() - 1;
+        let mut triangles = Vec::with_capacity(face_vertices.len() - 2 * face_count);
+        let mut triangle_face = Vec::with_capacity(triangles.capacity());
+        for f in 0..face_count {
+            let corners = &face_vertices[face_offsets[f] as usize..face_offsets[f + 1] as usize];
+            for pair in corners[1..].windows(2) {
+                triangles.push([corners[0], pair[0], pair[1]]);
+                triangle_face.push(f as u32);
+            }
+        }
+
+        // Every triangle edge with the face using it; sorting groups the users of one edge,
+        // lowest face first, so the first user is the owner.
+        let mut uses: Vec<([u32; 2], u32)> = Vec::with_capacity(3 * triangles.len());
+        for f in 0..face_count {
+            for t in face_triangle_range(face_offsets, f) {
+                let [a, b, c] = triangles[t];
+                for (p, q) in [(a, b), (b, c), (c, a)] {
+                    uses.push(([p.min(q), p.max(q)], f as u32));
+                }
+            }
+        }
+        uses.sort_unstable();
+        let mut edges = Vec::new();
+        let mut edge_triangle_count = Vec::new();
+        let mut edge_owner = Vec::new();
+        let mut adjacency = Vec::new();
+        for group in uses.chunk_by(|x, y| x.0 == y.0) {
+            edges.push(group[0].0);
+            edge_triangle_count.push(group.len() as u32);
+            edge_owner.push(group[0].1);
+            for pair in group.windows(2) {
+                if pair[0].1 != pair[1].1 {
+                    adjacency.push([pair[0].1, pair[1].1]);
+                }
+            }
+        }
+        adjacency.sort_unstable();
+        adjacency.dedup();
+
+        let mut vertex_owner = vec![u32::MAX; vertex_count];
+        for f in 0..face_count {
+            for &v in &face_vertices[face_offsets[f] as usize..face_offsets[f + 1] as usize] {
+                let owner = &mut vertex_owner[v as usize];
+                if *owner == u32::MAX {
+                    *owner = f as u32;
+                }
+            }
+        }
+        let (owned_vertex_offsets, owned_vertices) = group_by_owner(&vertex_owner, face_count);
+        let (owned_edge_offsets, owned_edges) = group_by_owner(&edge_owner, face_count);
+        Ok(Self {
+            vertex_count,
+            face_offsets: face_offsets.to_vec(),
+            face_vertices: face_vertices.to_vec(),
+            triangles,
+            triangle_face,
+            edges,
+            edge_triangle_count,
+            adjacency,
+            owned_vertex_offsets,
+            owned_vertices,
+            owned_edge_offsets,
+            owned_edges,
+        })
+    }
+
+    /// Number of faces.
+    pub(crate) fn face_count(&self) -> usize {
+        self.face_offsets.len() - 1
+    }
+
+    /// The corners of face `f`.
+    pub(crate) fn face(&self, f: u32) -> &[u32] {
+        let f = f as usize;
+        &self.face_vertices[self.face_offsets[f] as usize..self.face_offsets[f + 1] as usize]
+    }
+
+    /// The indices of the fan triangles of face `f`.
+    pub(crate) fn face_triangles(&self, f: u32) -> std::ops::Range<usize> {
+        face_triangle_range(&self.face_offsets, f as usize)
+    }
+
+    /// The vertices face `f` owns.
+    pub(crate) fn owned_vertices(&self, f: u32) -> &[u32] {
+        let f = f as usize;
+        let range =
+            self.owned_vertex_offsets[f] as usize..self.owned_vertex_offsets[f + 1] as usize;
+        &self.owned_vertices[range]
+    }
+
+    /// The edges (indices into `edges`) face `f` owns.
+    pub(crate) fn owned_edges(&self, f: u32) -> &[u32] {
+        let f = f as usize;
+        let range = self.owned_edge_offsets[f] as usize..self.owned_edge_offsets[f + 1] as usize;
+        &self.owned_edges[range]
+    }
+
+    /// Whether two faces share at least one vertex.
+    pub(crate) fn faces_share_vertex(&self, f: u32, g: u32) -> bool {
+        let other = self.face(g);
+        self.face(f).iter().any(|v| other.contains(v))
+    }
+}
+
+/// The triangles of face `f` under fan triangulation.
+fn face_triangle_range(face_offsets: &[u32], f: usize) -> std::ops::Range<usize> {
+    face_offsets[f] as usize - 2 * f..face_offsets[f + 1] as usize - 2 * (f + 1)
+}
+
+/// Groups item indices by owner (counting sort); owners `u32::MAX` (none) are left out.
+fn group_by_owner(owner: &[u32], owners: usize) -> (Vec<u32>, Vec<u32>) {
+    let mut offsets = vec![0u32; owners + 1];
+    for &o in owner.iter().filter(|&&o| o != u32::MAX) {
+        offsets[o as usize + 1] += 1;
+    }
+    for i in 0..owners {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut cursor = offsets.clone();
+    let mut items = vec![0u32; offsets[owners] as usize];
+    for (item, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != u32::MAX) {
+        items[cursor[o as usize] as usize] = item as u32;
+        cursor[o as usize] += 1;
+    }
+    (offsets, items)
+}
+
+fn validate(
+    vertex_count: usize,
+    face_offsets: &[u32],
+    face_vertices: &[u32],
+) -> Result<(), CollideError> {
+    if face_offsets.len() < 2 {
+        return Err(CollideError::Empty);
+    }
+    let bad = CollideError::BadOffsets {
+        corners: face_vertices.len(),
+    };
+    if face_offsets[0] != 0 || *face_offsets.last().unwrap_or(&0) as usize != face_vertices.len() {
+        return Err(bad);
+    }
+    for (face, w) in face_offsets.windows(2).enumerate() {
+        if w[1] < w[0] {
+            return Err(bad);
+        }
+        let corners = &face_vertices[w[0] as usize..w[1] as usize];
+        if corners.len() < 3 {
+            return Err(CollideError::TooFewVertices {
+                face,
+                corners: corners.len(),
+            });
+        }
+        for (i, &vertex) in corners.iter().enumerate() {
+            if vertex as usize >= vertex_count {
+                return Err(CollideError::VertexOutOfRange {
+                    face,
+                    vertex,
+                    count: vertex_count,
+                });
+            }
+            if corners[..i].contains(&vertex) {
+                return Err(CollideError::RepeatedVertex { face, vertex });
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A quad and a pentagon sharing the edge 1–2.
+    fn quad_and_pentagon() -> Topology {
+        Topology::new(7, &[0, 4, 9], &[0, 1, 2, 3, 1, 4, 5, 6, 2]).unwrap()
+    }
+
+    #[test]
+    fn fans_polygons_into_triangles() {
+        let t = quad_and_pentagon();
+        assert_eq!(
+            t.triangles,
+            vec![[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 6], [1, 6, 2]]
+        );
+        assert_eq!(t.face_triangles(0), 0..2);
+        assert_eq!(t.face_triangles(1), 2..5);
+        assert_eq!(t.triangle_face, vec![0, 0, 1, 1, 1]);
+    }
+
+    #[test]
+    fn edges_owners_and_adjacency() {
+        let t = quad_and_pentagon();
+        // 4 + 5 polygon edges, one shared, plus 1 + 2 diagonals.
+        assert_eq!(t.edges.len(), 4 + 5 - 1 + 3);
+        let shared = t.edges.iter().position(|e| *e == [1, 2]).unwrap();
+        assert_eq!(t.edge_triangle_count[shared], 2);
+        assert!(t.owned_edges(0).contains(&(shared as u32)));
+        assert_eq!(
+            t.owned_edges(0).len() + t.owned_edges(1).len(),
+            t.edges.len()
+        );
+        assert_eq!(t.adjacency, vec![[0, 1]]);
+        assert_eq!(t.owned_vertices(0), &[0, 1, 2, 3]);
+        assert_eq!(t.owned_vertices(1), &[4, 5, 6]);
+        assert!(t.faces_share_vertex(0, 1));
+    }
+
+    #[test]
+    fn rejects_bad_faces() {
+        assert_eq!(
+            Topology::new(3, &[0], &[]).unwrap_err(),
+            CollideError::Empty
+        );
+        assert_eq!(
+            Topology::new(3, &[0, 2], &[0, 1]).unwrap_err(),
+            CollideError::TooFewVertices {
+                face: 0,
+                corners: 2
+            }
+        );
+        assert_eq!(
+            Topology::new(3, &[0, 3], &[0, 1, 3]).unwrap_err(),
+            CollideError::VertexOutOfRange {
+                face: 0,
+                vertex: 3,
+                count: 3
+            }
+        );
+        assert_eq!(
+            Topology::new(3, &[0, 3], &[0, 1, 1]).unwrap_err(),
+            CollideError::RepeatedVertex { face: 0, vertex: 1 }
+        );
+        assert_eq!(
+            Topology::new(3, &[0, 4], &[0, 1, 2]).unwrap_err(),
+            CollideError::BadOffsets { corners: 3 }
+        );
+    }
+}

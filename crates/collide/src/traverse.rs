@@ -1,0 +1,151 @@
+//! Pairs of leaves whose boxes overlap, within one hierarchy or between two: the simultaneous
+//! descent of Gottschalk, Lin & Manocha (1996), with self-collision organised as Volino &
+//! Magnenat-Thalmann (1994) do it: the pairs inside a node are those inside each child plus
+//! those across the two children, and a node the normal cones clear is skipped whole.
+//!
+//! Subtrees run in parallel (`rayon::join`) and their results are concatenated in a fixed
+//! order, so the output does not depend on the number of threads.
+
+use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::math::Vector as DVec3;
+
+use crate::cones::NormalCones;
+use crate::hierarchy::Hierarchy;
+
+/// Subtrees with fewer leaves than this are walked on one thread.
+const GRAIN: u32 = 1024;
+
+/// What to do with a pair of leaves (faces) whose boxes overlap: push results to the vector.
+pub(crate) type Visit<'a, T> = &'a (dyn Fn(u32, u32, &mut Vec<T>) + Sync);
+
+/// Visits every unordered pair of distinct leaves of `h` with overlapping boxes, each leaf with
+/// itself too when `same_leaf`, skipping nodes that `cones` clear. Boxes are compared loosened
+/// by `slack` (see [`overlap`]).
+pub(crate) fn self_pairs<T: Send>(
+    h: &Hierarchy,
+    cones: Option<&NormalCones>,
+    same_leaf: bool,
+    slack: f64,
+    visit: Visit<'_, T>,
+) -> Vec<T> {
+    let mut out = Vec::new();
+    let walk = Walk {
+        ha: h,
+        hb: h,
+        slack,
+        visit,
+    };
+    SelfWalk {
+        walk,
+        cones,
+        same_leaf,
+    }
+    .node(h.root(), &mut out);
+    out
+}
+
+/// Visits every pair (leaf of `a`, leaf of `b`) with overlapping boxes, loosened by `slack`.
+pub(crate) fn cross_pairs<T: Send>(
+    a: &Hierarchy,
+    b: &Hierarchy,
+    slack: f64,
+    visit: Visit<'_, T>,
+) -> Vec<T> {
+    let mut out = Vec::new();
+    let walk = Walk {
+        ha: a,
+        hb: b,
+        slack,
+        visit,
+    };
+    walk.cross(a.root(), b.root(), &mut out);
+    out
+}
+
+/// Whether two boxes overlap once each is loosened by `slack` times its diagonal: the contact
+/// tolerance of the exact tests is relative to the size of the features.
+fn overlap(a: &Aabb, b: &Aabb, slack: f64) -> bool {
+    let pad = DVec3::splat(slack * ((a.maxs - a.mins).length() + (b.maxs - b.mins).length()));
+    (a.mins - pad).cmple(b.maxs).all() && (b.mins - pad).cmple(a.maxs).all()
+}
+
+fn collect<T>(f: impl FnOnce(&mut Vec<T>)) -> Vec<T> {
+    let mut out = Vec::new();
+    f(&mut out);
+    out
+}
+
+struct Walk<'a, T> {
+    ha: &'a Hierarchy,
+    hb: &'a Hierarchy,
+    slack: f64,
+    visit: Visit<'a, T>,
+}
+
+impl<T: Send> Walk<'_, T> {
+    /// Visits the overlapping leaf pairs below node `a` of `ha` and node `b` of `hb`.
+    fn cross(&self, a: u32, b: u32, out: &mut Vec<T>) {
+        let (ha, hb) = (self.ha, self.hb);
+        if !overlap(&ha.boxes[a as usize], &hb.boxes[b as usize], self.slack) {
+            return;
+        }
+        let (size_a, size_b) = (ha.leaf_counts[a as usize], hb.leaf_counts[b as usize]);
+        let (x, y) = match (ha.node_children(a), hb.node_children(b)) {
+            (None, None) => return (self.visit)(a, b, out),
+            (Some([a0, a1]), None) => ((a0, b), (a1, b)),
+            (None, Some([b0, b1])) => ((a, b0), (a, b1)),
+            (Some([a0, a1]), Some(_)) if size_a >= size_b => ((a0, b), (a1, b)),
+            (_, Some([b0, b1])) => ((a, b0), (a, b1)),
+        };
+        if size_a.min(size_b) >= GRAIN / 4 && size_a.max(size_b) >= GRAIN {
+            let (mut first, mut second) = rayon::join(
+                || collect(|o| self.cross(x.0, x.1, o)),
+                || collect(|o| self.cross(y.0, y.1, o)),
+            );
+            out.append(&mut first);
+            out.append(&mut second);
+        } else {
+            self.cross(x.0, x.1, out);
+            self.cross(y.0, y.1, out);
+        }
+    }
+}
+
+struct SelfWalk<'a, T> {
+    walk: Walk<'a, T>,
+    cones: Option<&'a NormalCones>,
+    same_leaf: bool,
+}
+
+impl<T: Send> SelfWalk<'_, T> {
+    fn node(&self, node: u32, out: &mut Vec<T>) {
+        let h = self.walk.ha;
+        if self.cones.is_some_and(|c| c.cannot_self_collide(h, node)) {
+            return;
+        }
+        let Some([a, b]) = h.node_children(node) else {
+            if self.same_leaf {
+                (self.walk.visit)(node, node, out);
+            }
+            return;
+        };
+        if h.leaf_counts[node as usize] < GRAIN {
+            self.node(a, out);
+            self.node(b, out);
+            self.walk.cross(a, b, out);
+            return;
+        }
+        let (mut left, (mut right, mut across)) = rayon::join(
+            || collect(|o| self.node(a, o)),
+            || {
+                rayon::join(
+                    || collect(|o| self.node(b, o)),
+                    || collect(|o| self.walk.cross(a, b, o)),
+                )
+            },
+        );
+        out.append(&mut left);
+        out.append(&mut right);
+        out.append(&mut across);
+    }
+}

@@ -1,0 +1,274 @@
+//! Exact tests on single triangles and segments: zero area, triangle–triangle intersection and
+//! closest points between segments.
+//!
+//! The intersection test is the classic reduction (Möller 1997; Guigue & Devillers 2003): two
+//! triangles in general position meet exactly when an edge of one crosses the other, decided by
+//! signs of 3×3 determinants (orientations); coplanar triangles are projected on their dominant
+//! plane and tested with 2D orientations. The orientations come from Shewchuk's adaptive exact
+//! predicates (`robust`), so coplanar and touching configurations, which flat cloth produces all
+//! the time, are decided exactly. Touching counts as intersecting.
+
+use parry3d_f64::math::Vector as DVec3;
+use robust::{Coord, Coord3D, orient2d, orient3d};
+
+use crate::Point;
+use crate::convert::to_glam;
+
+/// Whether a triangle has (numerically) zero area: twice its area is within rounding of zero
+/// relative to its longest edge.
+pub(crate) fn is_degenerate([a, b, c]: [DVec3; 3]) -> bool {
+    let longest = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
+    (b - a).cross(c - a).length() <= 4.0 * f64::EPSILON * longest
+}
+
+/// Whether two triangles intersect or touch (exactly, with adaptive predicates).
+///
+/// A zero-area triangle never intersects anything: the collision queries skip such triangles
+/// and count them ([`crate::Hierarchy::degenerate_triangles`]).
+#[must_use]
+pub fn triangles_intersect(p: [Point; 3], q: [Point; 3]) -> bool {
+    triangles_meet(p.map(|x| to_glam(&x)), q.map(|x| to_glam(&x)))
+}
+
+/// [`triangles_intersect`] on glam vectors.
+pub(crate) fn triangles_meet(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
+    if is_degenerate(p) || is_degenerate(q) {
+        return false;
+    }
+    let side_of_p = q.map(|x| orient(p, x));
+    if strictly_one_side(side_of_p) {
+        return false;
+    }
+    let side_of_q = p.map(|x| orient(q, x));
+    if strictly_one_side(side_of_q) {
+        return false;
+    }
+    if side_of_p == [0.0; 3] {
+        let axis = dominant_axis(p);
+        return triangles_meet_2d(project(p, axis), project(q, axis));
+    }
+    (0..3).any(|i| {
+        let j = (i + 1) % 3;
+        segment_meets_triangle(p[i], p[j], side_of_q[i], side_of_q[j], q)
+            || segment_meets_triangle(q[i], q[j], side_of_p[i], side_of_p[j], p)
+    })
+}
+
+/// The sign of the orientation of `x` against the plane of `t` (0 when coplanar).
+fn orient(t: [DVec3; 3], x: DVec3) -> f64 {
+    let c = |v: DVec3| Coord3D {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    };
+    orient3d(c(t[0]), c(t[1]), c(t[2]), c(x)).signum_or_zero()
+}
+
+trait SignumOrZero {
+    fn signum_or_zero(self) -> Self;
+}
+
+impl SignumOrZero for f64 {
+    fn signum_or_zero(self) -> f64 {
+        if self == 0.0 { 0.0 } else { self.signum() }
+    }
+}
+
+fn strictly_one_side(s: [f64; 3]) -> bool {
+    s.iter().all(|&x| x > 0.0) || s.iter().all(|&x| x < 0.0)
+}
+
+/// Whether segment `ab`, whose ends lie on sides `sa`, `sb` of the plane of `t`, meets `t`.
+fn segment_meets_triangle(a: DVec3, b: DVec3, sa: f64, sb: f64, t: [DVec3; 3]) -> bool {
+    if sa * sb > 0.0 {
+        return false;
+    }
+    if sa == 0.0 && sb == 0.0 {
+        let axis = dominant_axis(t);
+        let [a2, b2] = [a, b].map(|x| drop_axis(x, axis));
+        let t2 = project(t, axis);
+        return (0..3).any(|i| segments_meet_2d(a2, b2, t2[i], t2[(i + 1) % 3]))
+            || point_in_triangle_2d(a2, t2);
+    }
+    // The line ab passes through t when it turns the same way around all three edges.
+    let turns = [0, 1, 2].map(|i| orient([a, b, t[i]], t[(i + 1) % 3]));
+    turns.iter().all(|&s| s >= 0.0) || turns.iter().all(|&s| s <= 0.0)
+}
+
+type V2 = [f64; 2];
+
+/// The axis along which the normal of `t` is largest; dropping it keeps `t` non-degenerate.
+fn dominant_axis([a, b, c]: [DVec3; 3]) -> usize {
+    let n = (b - a).cross(c - a).abs();
+    if n.x >= n.y && n.x >= n.z {
+        0
+    } else if n.y >= n.z {
+        1
+    } else {
+        2
+    }
+}
+
+fn drop_axis(v: DVec3, axis: usize) -> V2 {
+    match axis {
+        0 => [v.y, v.z],
+        1 => [v.z, v.x],
+        _ => [v.x, v.y],
+    }
+}
+
+fn project(t: [DVec3; 3], axis: usize) -> [V2; 3] {
+    t.map(|v| drop_axis(v, axis))
+}
+
+fn orient_2d(a: V2, b: V2, c: V2) -> f64 {
+    let k = |v: V2| Coord { x: v[0], y: v[1] };
+    orient2d(k(a), k(b), k(c)).signum_or_zero()
+}
+
+fn triangles_meet_2d(p: [V2; 3], q: [V2; 3]) -> bool {
+    (0..3).any(|i| (0..3).any(|j| segments_meet_2d(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3])))
+        || point_in_triangle_2d(p[0], q)
+        || point_in_triangle_2d(q[0], p)
+}
+
+fn point_in_triangle_2d(x: V2, t: [V2; 3]) -> bool {
+    let s = [0, 1, 2].map(|i| orient_2d(t[i], t[(i + 1) % 3], x));
+    s.iter().all(|&v| v >= 0.0) || s.iter().all(|&v| v <= 0.0)
+}
+
+fn segments_meet_2d(a: V2, b: V2, c: V2, d: V2) -> bool {
+    let (o1, o2) = (orient_2d(a, b, c), orient_2d(a, b, d));
+    let (o3, o4) = (orient_2d(c, d, a), orient_2d(c, d, b));
+    if o1 * o2 < 0.0 && o3 * o4 < 0.0 {
+        return true;
+    }
+    let within =
+        |p: V2, q: V2, x: V2| (0..2).all(|k| p[k].min(q[k]) <= x[k] && x[k] <= p[k].max(q[k]));
+    (o1 == 0.0 && within(a, b, c))
+        || (o2 == 0.0 && within(a, b, d))
+        || (o3 == 0.0 && within(c, d, a))
+        || (o4 == 0.0 && within(c, d, b))
+}
+
+/// Closest points between segments `p0 p1` and `q0 q1` (Ericson, *Real-Time Collision
+/// Detection*, §5.1.9): the parameters `(s, u)` in `[0, 1]` along each and the distance.
+/// Parallel and zero-length segments are handled.
+pub(crate) fn segment_closest(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3) -> (f64, f64, f64) {
+    let (d1, d2, r) = (p1 - p0, q1 - q0, p0 - q0);
+    let (a, e, f) = (d1.length_squared(), d2.length_squared(), d2.dot(r));
+    let (s, u) = if a <= f64::MIN_POSITIVE && e <= f64::MIN_POSITIVE {
+        (0.0, 0.0)
+    } else if a <= f64::MIN_POSITIVE {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(r);
+        if e <= f64::MIN_POSITIVE {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > 0.0 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut u = (b * s + f) / e;
+            if u < 0.0 {
+                u = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if u > 1.0 {
+                u = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, u)
+        }
+    };
+    let distance = ((p0 + d1 * s) - (q0 + d2 * u)).length();
+    (s, u, distance)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn t(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [DVec3; 3] {
+        [a, b, c].map(DVec3::from_array)
+    }
+
+    const FLOOR: [[f64; 3]; 3] = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]];
+
+    fn floor() -> [DVec3; 3] {
+        t(FLOOR[0], FLOOR[1], FLOOR[2])
+    }
+
+    #[test]
+    fn piercing_triangle_intersects() {
+        let wall = t([0.5, 0.5, -1.0], [0.5, 0.5, 1.0], [3.0, 3.0, 0.0]);
+        assert!(triangles_meet(floor(), wall));
+        assert!(triangles_meet(wall, floor()));
+    }
+
+    #[test]
+    fn separated_and_near_miss_triangles_do_not() {
+        let above = t([0.0, 0.0, 1e-12], [1.0, 0.0, 1e-12], [0.0, 1.0, 1.0]);
+        assert!(!triangles_meet(floor(), above));
+        // Crosses the floor's plane, but outside its hypotenuse x + y = 2.
+        let beside = t([1.5, 1.5, -1.0], [1.5, 1.5, 1.0], [3.0, 3.0, 0.0]);
+        assert!(!triangles_meet(floor(), beside));
+    }
+
+    #[test]
+    fn touching_counts() {
+        // A vertex resting exactly on the floor, and an edge lying on it.
+        let tip = t([0.5, 0.5, 0.0], [0.5, 0.0, 1.0], [0.0, 0.5, 1.0]);
+        assert!(triangles_meet(floor(), tip));
+        let edge_down = t([0.5, 0.1, 0.0], [0.1, 0.5, 0.0], [0.3, 0.3, 1.0]);
+        assert!(triangles_meet(floor(), edge_down));
+    }
+
+    #[test]
+    fn coplanar_cases() {
+        let overlapping = t([1.0, 1.0, 0.0], [3.0, 1.0, 0.0], [1.0, 3.0, 0.0]);
+        assert!(triangles_meet(floor(), overlapping));
+        let disjoint = t([1.1, 1.1, 0.0], [3.0, 1.1, 0.0], [1.1, 3.0, 0.0]);
+        assert!(!triangles_meet(floor(), disjoint));
+        let inside = t([0.1, 0.1, 0.0], [0.5, 0.1, 0.0], [0.1, 0.5, 0.0]);
+        assert!(triangles_meet(floor(), inside) && triangles_meet(inside, floor()));
+    }
+
+    #[test]
+    fn degenerate_triangles_are_skipped() {
+        let sliver = t([0.5, 0.5, -1.0], [0.5, 0.5, 1.0], [0.5, 0.5, 0.0]);
+        assert!(is_degenerate(sliver));
+        assert!(!triangles_meet(floor(), sliver));
+        assert!(!is_degenerate(floor()));
+    }
+
+    #[test]
+    fn segment_closest_points() {
+        let x = |v: f64| DVec3::new(v, 0.0, 0.0);
+        // Skew segments: along x at z = 0 and along y at z = 1, crossing above (0.5, 0).
+        let (s, u, d) = segment_closest(
+            x(0.0),
+            x(1.0),
+            DVec3::new(0.5, -1.0, 1.0),
+            DVec3::new(0.5, 1.0, 1.0),
+        );
+        assert_eq!((s, u, d), (0.5, 0.5, 1.0));
+        // Parallel overlapping segments one apart.
+        let (_, _, d) = segment_closest(
+            x(0.0),
+            x(2.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(3.0, 1.0, 0.0),
+        );
+        assert_eq!(d, 1.0);
+        // A zero-length segment against a segment.
+        let (s, u, d) = segment_closest(DVec3::Y, DVec3::Y, x(-1.0), x(1.0));
+        assert_eq!((s, u, d), (0.0, 0.5, 1.0));
+    }
+}

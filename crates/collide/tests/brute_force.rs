@@ -1,0 +1,527 @@
+//! Every hierarchy query gives exactly the brute-force answer (all vertex–triangle, all
+//! triangle–triangle, all edge–edge pairs) on structured meshes (sheets, a folded sheet, a
+//! sphere with n-gon caps, a torus, a sheet of n-gons with boundaries) and random triangle
+//! soups, static and deforming, and the same answer with 1 and 2 threads.
+
+mod common;
+
+use common::{Mesh, Rng, folded_sheet, ngon_sheet, soup, sphere, torus, wave};
+use parry3d_f64::math::Vector as DVec3;
+use parry3d_f64::query::PointQueryWithLocation;
+use parry3d_f64::shape::Triangle;
+use tailor_collide::{
+    CollideError, Hierarchy, Point, edge_edge_impact, triangles_intersect, vertex_triangle_impact,
+};
+
+fn build(m: &Mesh) -> Hierarchy {
+    Hierarchy::build(&m.positions, &m.offsets, &m.corners).unwrap()
+}
+
+fn g(p: &Point) -> DVec3 {
+    DVec3::new(p.x, p.y, p.z)
+}
+
+/// Brute force: distance from `q` to every triangle of non-zero area (twice the area above
+/// rounding of the longest edge squared), as `(distance, face, triangle)`.
+fn all_distances(m: &Mesh, positions: &[Point], q: &Point) -> Vec<(f64, u32, u32)> {
+    m.triangles()
+        .iter()
+        .enumerate()
+        .filter_map(|(t, &(corners, f))| {
+            let [a, b, c] = corners.map(|v| g(&positions[v as usize]));
+            let longest = (b - a)
+                .length_squared()
+                .max((c - b).length_squared())
+                .max((a - c).length_squared());
+            if (b - a).cross(c - a).length() <= 4.0 * f64::EPSILON * longest {
+                return None;
+            }
+            let (proj, _) =
+                Triangle::new(a, b, c).project_local_point_and_get_location(g(q), false);
+            Some(((g(q) - proj.point).length(), f, t as u32))
+        })
+        .collect()
+}
+
+/// Brute force: the nearest `(distance, face, triangle)` within `d` over faces not excluded.
+fn nearest(
+    all: &[(f64, u32, u32)],
+    d: f64,
+    excluded: impl Fn(u32) -> bool,
+) -> Option<(f64, u32, u32)> {
+    all.iter().filter(|x| x.0 <= d && !excluded(x.1)).fold(
+        None,
+        |best: Option<(f64, u32, u32)>, &x| match best {
+            Some(b) if (b.0, b.1) <= (x.0, x.1) => Some(b),
+            _ => Some(x),
+        },
+    )
+}
+
+/// Brute force: faces within `d`, sorted.
+fn faces_near(all: &[(f64, u32, u32)], d: f64, excluded: impl Fn(u32) -> bool) -> Vec<u32> {
+    let mut faces: Vec<u32> = all
+        .iter()
+        .filter(|x| x.0 <= d && !excluded(x.1))
+        .map(|x| x.1)
+        .collect();
+    faces.dedup();
+    faces
+}
+
+fn meshes() -> Vec<(&'static str, Mesh)> {
+    vec![
+        ("sphere", sphere(8, 12, 1.0)),
+        ("torus", torus(16, 8, 1.0, 0.3)),
+        (
+            "ngons",
+            ngon_sheet(5, 4, 3, |x, y| 0.2 * (3.0 * x).sin() * y),
+        ),
+        ("folded", folded_sheet(12, 0.3)),
+        ("soup", soup(150, 0.3, 7)),
+    ]
+}
+
+#[test]
+fn closest_points_match_brute_force() {
+    let mut rng = Rng::new(1);
+    for (name, m) in meshes() {
+        let h = build(&m);
+        let queries: Vec<Point> = (0..60).map(|_| rng.point(1.5)).collect();
+        for d in [0.1, 0.4, f64::INFINITY] {
+            let got = h.closest_points(&queries, d).unwrap();
+            let near = h.faces_within(&queries, d.min(0.4)).unwrap();
+            for (i, q) in queries.iter().enumerate() {
+                let all = all_distances(&m, &m.positions, q);
+                let want = nearest(&all, d, |_| false);
+                let got_key = got[i].map(|c| (c.distance, c.face, c.triangle));
+                assert_eq!(got_key, want, "{name}: query {i} within {d}");
+                let faces: Vec<u32> = near.of(i).iter().map(|c| c.face).collect();
+                assert_eq!(
+                    faces,
+                    faces_near(&all, d.min(0.4), |_| false),
+                    "{name}: query {i}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn closest_point_fields_are_consistent() {
+    let m = sphere(6, 8, 1.0);
+    let h = build(&m);
+    let q = Point::new(0.3, 0.2, 1.4);
+    let c = h.closest_points(&[q], f64::INFINITY).unwrap()[0].unwrap();
+    let [a, b, d] = c.vertices.map(|v| m.positions[v as usize].coords);
+    let w = c.barycentric;
+    let from_weights = a * w[0] + b * w[1] + d * w[2];
+    assert!((from_weights - c.point.coords).norm() < 1e-12);
+    assert!(((q - c.point).norm() - c.distance).abs() < 1e-12);
+    assert!((c.normal.norm() - 1.0).abs() < 1e-12 && c.normal.dot(&(q - c.point)) > 0.0);
+    assert_eq!(h.triangle_faces()[c.triangle as usize], c.face);
+}
+
+#[test]
+fn self_proximity_matches_brute_force() {
+    for (name, m) in meshes() {
+        let h = build(&m);
+        for d in [0.02, 0.15] {
+            let got = h.self_proximity(d).unwrap();
+            for (v, q) in m.positions.iter().enumerate() {
+                let all = all_distances(&m, &m.positions, q);
+                let face_has_v = |f: u32| {
+                    m.corners[m.offsets[f as usize] as usize..m.offsets[f as usize + 1] as usize]
+                        .contains(&(v as u32))
+                };
+                let faces: Vec<u32> = got.of(v).iter().map(|c| c.face).collect();
+                assert_eq!(
+                    faces,
+                    faces_near(&all, d, face_has_v),
+                    "{name}: vertex {v} within {d}"
+                );
+            }
+        }
+    }
+}
+
+fn share_vertex(m: &Mesh, f: u32, g: u32) -> bool {
+    let face =
+        |f: u32| &m.corners[m.offsets[f as usize] as usize..m.offsets[f as usize + 1] as usize];
+    face(f).iter().any(|v| face(g).contains(v))
+}
+
+/// Brute force: every pair of faces sharing no vertex whose triangles meet.
+fn brute_self_intersections(m: &Mesh, positions: &[Point]) -> Vec<[u32; 2]> {
+    let tris = m.triangles();
+    let corner = |t: [u32; 3]| t.map(|v| positions[v as usize]);
+    let mut pairs = Vec::new();
+    for (i, &(s, f)) in tris.iter().enumerate() {
+        for &(t, g) in &tris[i + 1..] {
+            if f != g && !share_vertex(m, f, g) && triangles_intersect(corner(s), corner(t)) {
+                pairs.push([f.min(g), f.max(g)]);
+            }
+        }
+    }
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs
+}
+
+#[test]
+fn self_intersections_match_brute_force() {
+    let crumpled = |p: &Point| {
+        Point::new(
+            p.x,
+            p.y + 0.3 * (5.0 * p.x).sin(),
+            0.25 * (9.0 * p.x).cos() * (7.0 * p.y).sin(),
+        )
+    };
+    let mut cases = vec![];
+    for (name, m) in meshes() {
+        cases.push((name, m.positions.clone(), m.clone()));
+        cases.push((name, m.mapped(crumpled), m));
+    }
+    let mut found_any = false;
+    for (name, positions, m) in cases {
+        let mut h = build(&m);
+        h.refit(&positions, 0.0).unwrap();
+        let want = brute_self_intersections(&m, &positions);
+        found_any |= !want.is_empty();
+        assert_eq!(h.self_intersections(), want, "{name}");
+    }
+    assert!(found_any, "the cases must include intersecting meshes");
+}
+
+#[test]
+fn smooth_closed_and_open_surfaces_do_not_self_intersect() {
+    for m in [
+        sphere(10, 16, 1.0),
+        torus(24, 12, 1.0, 0.3),
+        folded_sheet(16, 0.1),
+        common::sheet(20, |x, y| 0.1 * (4.0 * x).sin() * y),
+    ] {
+        assert!(build(&m).self_intersections().is_empty());
+    }
+    // The sagging fold does pass through itself.
+    assert!(
+        !build(&folded_sheet(16, 0.3))
+            .self_intersections()
+            .is_empty()
+    );
+}
+
+fn unique_edges(m: &Mesh) -> Vec<[u32; 2]> {
+    let mut edges: Vec<[u32; 2]> = m
+        .triangles()
+        .iter()
+        .flat_map(|&([a, b, c], _)| [[a, b], [b, c], [c, a]])
+        .map(|[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
+
+type Key = (u32, u32, u64);
+type EdgeKey = ([[u32; 2]; 2], u64);
+
+/// Asserts two sorted lists are equal, naming only the differences.
+fn assert_same<T: PartialEq + std::fmt::Debug>(got: &[T], want: &[T], what: &str) {
+    let missing: Vec<&T> = want.iter().filter(|x| !got.contains(x)).collect();
+    let extra: Vec<&T> = got.iter().filter(|x| !want.contains(x)).collect();
+    assert!(
+        missing.is_empty() && extra.is_empty(),
+        "{what}: missing {missing:?}, extra {extra:?}"
+    );
+    assert_eq!(got, want, "{what}: order");
+}
+
+/// A vertex's straight path over the step.
+type PathOf<'a> = &'a dyn Fn(u32) -> [Point; 2];
+
+/// Brute force: every (vertex, triangle) impact, skipping triangles that use the vertex when
+/// both come from one mesh.
+fn brute_vertex_triangle(
+    vertices: u32,
+    vp: PathOf,
+    triangles: &[([u32; 3], u32)],
+    tp: PathOf,
+    same: bool,
+) -> Vec<Key> {
+    let mut found = Vec::new();
+    for (t, &(tri, _)) in triangles.iter().enumerate() {
+        for v in 0..vertices {
+            if !(same && tri.contains(&v))
+                && let Some((time, _)) = vertex_triangle_impact(vp(v), tri.map(tp))
+            {
+                found.push((v, t as u32, time.to_bits()));
+            }
+        }
+    }
+    found.sort_unstable();
+    found
+}
+
+/// Brute force: every edge–edge impact; within one mesh each unordered pair once, skipping
+/// pairs that share a vertex.
+fn brute_edge_edge(
+    first: &[[u32; 2]],
+    fp: PathOf,
+    second: &[[u32; 2]],
+    sp: PathOf,
+    same: bool,
+) -> Vec<EdgeKey> {
+    let mut found = Vec::new();
+    for (i, &a) in first.iter().enumerate() {
+        let others = if same { &second[i + 1..] } else { second };
+        for &b in others {
+            if !(same && a.iter().any(|v| b.contains(v)))
+                && let Some((time, _)) = edge_edge_impact(a.map(fp), b.map(sp))
+            {
+                found.push(([a, b], time.to_bits()));
+            }
+        }
+    }
+    found.sort_unstable();
+    found
+}
+
+/// Brute force CCD of a mesh with itself.
+fn brute_self_impacts(m: &Mesh, start: &[Point], end: &[Point]) -> (Vec<Key>, Vec<EdgeKey>) {
+    let path = |v: u32| [start[v as usize], end[v as usize]];
+    let edges = unique_edges(m);
+    (
+        brute_vertex_triangle(start.len() as u32, &path, &m.triangles(), &path, true),
+        brute_edge_edge(&edges, &path, &edges, &path, true),
+    )
+}
+
+fn self_impact_keys(h: &Hierarchy) -> (Vec<Key>, Vec<EdgeKey>) {
+    let impacts = h.self_impacts();
+    let vt = impacts
+        .vertex_triangle
+        .iter()
+        .map(|i| (i.vertex, i.triangle, i.time.to_bits()))
+        .collect();
+    let ee = impacts
+        .edge_edge
+        .iter()
+        .map(|i| (i.edges, i.time.to_bits()))
+        .collect();
+    (vt, ee)
+}
+
+#[test]
+fn self_impacts_match_brute_force() {
+    let mut rng = Rng::new(3);
+    let cases: Vec<(&str, Mesh, Vec<Point>)> = {
+        let fold = folded_sheet(8, 0.0);
+        let fold_end = folded_sheet(8, 0.35).positions;
+        let flat = common::sheet(8, |_, _| 0.0);
+        let flat_end = flat.mapped(|p| wave(p, 1.0));
+        let tor = torus(12, 6, 1.0, 0.3);
+        let squash = tor.mapped(|p| Point::new(p.x, 0.1 * p.y, p.z));
+        let sp = soup(60, 0.3, 11);
+        let shaken: Vec<Point> = sp
+            .positions
+            .iter()
+            .map(|p| p + rng.point(0.3).coords)
+            .collect();
+        let ng = ngon_sheet(4, 3, 3, |_, _| 0.0);
+        let ng_end = ng.mapped(|p| Point::new(p.x, p.y, 0.3 * (std::f64::consts::PI * p.x).sin()));
+        vec![
+            ("fold closing", fold, fold_end),
+            ("waving sheet", flat, flat_end),
+            ("squashed torus", tor, squash),
+            ("shaken soup", sp, shaken),
+            ("bending ngons", ng, ng_end),
+        ]
+    };
+    let mut found_any = false;
+    for (name, m, end) in cases {
+        let mut h = build(&m);
+        h.refit_swept(&m.positions, &end, 0.0).unwrap();
+        let want = brute_self_impacts(&m, &m.positions, &end);
+        found_any |= !want.0.is_empty() && !want.1.is_empty();
+        let got = self_impact_keys(&h);
+        assert_same(&got.0, &want.0, name);
+        assert_same(&got.1, &want.1, name);
+    }
+    assert!(found_any, "some case must have both kinds of impact");
+}
+
+#[test]
+fn impacts_between_meshes_match_brute_force() {
+    let body = sphere(6, 10, 0.5);
+    let cloth = common::sheet(6, |_, _| 0.7);
+    let drop = cloth.mapped(|p| Point::new(p.x - 0.5, p.y - 0.5, -0.2 + 0.3 * p.x));
+    let lifted = cloth.mapped(|p| Point::new(p.x - 0.5, p.y - 0.5, p.z));
+    let body_end = body.mapped(|p| p + tailor_collide::Vector::new(0.05, 0.0, 0.1));
+    let mut hc = build(&cloth);
+    hc.refit_swept(&lifted, &drop, 0.0).unwrap();
+    let mut hb = build(&body);
+    hb.refit_swept(&body.positions, &body_end, 0.0).unwrap();
+    let impacts = hc.impacts_with(&hb);
+
+    let cloth_path = |v: u32| [lifted[v as usize], drop[v as usize]];
+    let body_path = |v: u32| [body.positions[v as usize], body_end[v as usize]];
+    let want_vt = brute_vertex_triangle(
+        cloth.positions.len() as u32,
+        &cloth_path,
+        &body.triangles(),
+        &body_path,
+        false,
+    );
+    let want_tv = brute_vertex_triangle(
+        body.positions.len() as u32,
+        &body_path,
+        &cloth.triangles(),
+        &cloth_path,
+        false,
+    );
+    let want_ee = brute_edge_edge(
+        &unique_edges(&cloth),
+        &cloth_path,
+        &unique_edges(&body),
+        &body_path,
+        false,
+    );
+    let keys = |list: &[tailor_collide::VertexTriangleImpact]| -> Vec<Key> {
+        list.iter()
+            .map(|i| (i.vertex, i.triangle, i.time.to_bits()))
+            .collect()
+    };
+    assert!(!want_vt.is_empty() && !want_tv.is_empty() && !want_ee.is_empty());
+    assert_same(&keys(&impacts.vertex_triangle), &want_vt, "cloth vertices");
+    assert_same(&keys(&impacts.triangle_vertex), &want_tv, "body vertices");
+    let ee: Vec<_> = impacts
+        .edge_edge
+        .iter()
+        .map(|i| (i.edges, i.time.to_bits()))
+        .collect();
+    assert_same(&ee, &want_ee, "edges");
+}
+
+/// Generalised winding number (Jacobson et al. 2013): the sum of signed solid angles / 4π.
+fn winding_number(m: &Mesh, q: &Point) -> f64 {
+    m.triangles()
+        .iter()
+        .map(|&(t, _)| {
+            let [a, b, c] = t.map(|v| m.positions[v as usize] - q);
+            let (la, lb, lc) = (a.norm(), b.norm(), c.norm());
+            let det = a.dot(&b.cross(&c));
+            let div = la * lb * lc + a.dot(&b) * lc + b.dot(&c) * la + c.dot(&a) * lb;
+            2.0 * det.atan2(div)
+        })
+        .sum::<f64>()
+        / (4.0 * std::f64::consts::PI)
+}
+
+#[test]
+fn signed_distance_sign_matches_winding_number() {
+    let mut rng = Rng::new(5);
+    for m in [sphere(8, 12, 1.0), torus(16, 8, 1.0, 0.4)] {
+        let h = build(&m);
+        let queries: Vec<Point> = (0..200).map(|_| rng.point(1.5)).collect();
+        let signed = h.signed_distances(&queries).unwrap();
+        let closest = h.closest_points(&queries, f64::INFINITY).unwrap();
+        for ((q, s), c) in queries.iter().zip(signed).zip(closest) {
+            assert_eq!(s.abs(), c.unwrap().distance);
+            let inside = winding_number(&m, q) > 0.5;
+            assert_eq!(s < 0.0, inside, "{q}");
+        }
+    }
+}
+
+#[test]
+fn answers_do_not_depend_on_thread_count() {
+    let m = folded_sheet(70, 0.1);
+    let start = m.positions.clone();
+    let end = folded_sheet(70, 0.35).positions;
+    let mut rng = Rng::new(9);
+    let queries: Vec<Point> = (0..300).map(|_| rng.point(1.0)).collect();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut h = build(&m);
+            h.refit_swept(&start, &end, 0.01).unwrap();
+            let impacts = h.self_impacts();
+            h.refit(&end, 0.0).unwrap();
+            (
+                h.depth(),
+                h.closest_points(&queries, 0.2).unwrap(),
+                h.self_proximity(0.02).unwrap(),
+                h.self_intersections(),
+                impacts,
+            )
+        })
+    };
+    let one = run(1);
+    assert!(!one.3.is_empty() && !one.4.vertex_triangle.is_empty());
+    assert_eq!(one, run(2));
+}
+
+#[test]
+fn hierarchy_is_balanced_on_connected_and_scattered_meshes() {
+    for (m, faces) in [
+        (common::sheet(64, |_, _| 0.0), 4096.0f64),
+        (soup(3000, 0.01, 2), 3000.0),
+    ] {
+        let h = build(&m);
+        let log = faces.log2().ceil() as usize;
+        assert!(
+            h.depth() >= log && h.depth() <= log + log / 2,
+            "depth {} for {faces} faces",
+            h.depth()
+        );
+    }
+}
+
+#[test]
+fn bad_input_is_an_error_and_degenerate_triangles_are_counted() {
+    let m = sphere(4, 6, 1.0);
+    let mut p = m.positions.clone();
+    p[3].z = f64::NAN;
+    assert_eq!(
+        Hierarchy::build(&p, &m.offsets, &m.corners).unwrap_err(),
+        CollideError::NonFinitePosition { vertex: 3 }
+    );
+    assert_eq!(
+        Hierarchy::build(&m.positions, &[0], &[]).unwrap_err(),
+        CollideError::Empty
+    );
+    let h = build(&m);
+    assert_eq!(
+        h.closest_points(&[Point::new(0.0, f64::INFINITY, 0.0)], 1.0)
+            .unwrap_err(),
+        CollideError::NonFiniteQuery { point: 0 }
+    );
+    assert!(matches!(
+        h.self_proximity(f64::NAN),
+        Err(CollideError::BadDistance { .. })
+    ));
+
+    // Collapse triangle 4 of a soup onto a segment and triangle 7 onto a point: both are
+    // counted, and neither is ever reported.
+    let s = soup(10, 0.3, 4);
+    let mut q = s.positions.clone();
+    q[13] = q[12] + (q[14] - q[12]) * 0.5;
+    q[22] = q[21];
+    q[23] = q[21];
+    let mut h = build(&s);
+    h.refit(&q, 0.0).unwrap();
+    assert_eq!(h.degenerate_triangles(), 2);
+    for v in [13, 21] {
+        let hit = h.closest_points(&[q[v]], f64::INFINITY).unwrap()[0].unwrap();
+        assert!(hit.face != 4 && hit.face != 7);
+    }
+    assert!(
+        h.self_intersections()
+            .iter()
+            .all(|p| !p.contains(&4) && !p.contains(&7))
+    );
+}

@@ -1,0 +1,224 @@
+//! `tailor check`: quality control of a finished simulation. Per frame, the cloth vertices
+//! inside the body or closer to it than the thickness, the deepest of them, and the cloth's
+//! self-intersecting face pairs; a summary on standard output and optionally a JSON report.
+//!
+//! Inside/outside uses the body's pseudo-normals (`tailor_collide::Hierarchy::signed_distances`)
+//! and needs a closed body; an open body is checked by distance only. Hierarchies are built for
+//! the first frame and refit for every later frame of the same topology.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result, bail};
+use serde_json::json;
+use tailor_collide::Hierarchy;
+
+use crate::polymesh_obj::{self, PolyMesh};
+use crate::sequence::Pattern;
+
+/// Arguments of `tailor check`.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Exit status: 0 when nothing is found, 1 when any vertex penetrates or any \
+faces intersect, 2 when the input cannot be checked (unreadable file, non-finite coordinate, \
+missing frame)."
+)]
+pub struct Args {
+    /// Cloth OBJ, or a frame sequence pattern such as `out/cloth_####.obj` (each run of `#` is
+    /// the zero-padded frame number; every frame present is checked).
+    pub cloth: PathBuf,
+    /// Body OBJ, or a body sequence pattern such as `body_####.obj` matched frame by frame.
+    /// A closed body (every edge shared by two faces, faces counter-clockwise seen from
+    /// outside) has an inside: cloth vertices inside it, or closer than the thickness, count as
+    /// penetrating. An open body has no inside: only vertices closer than the thickness count,
+    /// so with thickness 0 nothing does, and a warning says so.
+    #[arg(long, value_name = "BODY")]
+    pub against: Option<PathBuf>,
+    /// Minimum clearance between cloth and body, in metres; penetration is measured as how far
+    /// a vertex would have to move out to reach it.
+    #[arg(long, default_value_t = 0.0, value_name = "T")]
+    pub thickness: f64,
+    /// Also write the report as JSON: `{"frames": [{"frame", "penetrating_vertices",
+    /// "max_penetration", "self_intersecting_pairs"}], "total": {…}}`.
+    #[arg(long, value_name = "REPORT.json")]
+    pub json: Option<PathBuf>,
+}
+
+/// What one frame has wrong.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Findings {
+    penetrating_vertices: usize,
+    max_penetration: f64,
+    self_intersecting_pairs: usize,
+}
+
+impl Findings {
+    fn json(&self) -> serde_json::Value {
+        json!({
+            "penetrating_vertices": self.penetrating_vertices,
+            "max_penetration": self.max_penetration,
+            "self_intersecting_pairs": self.self_intersecting_pairs,
+        })
+    }
+
+    fn is_clean(&self) -> bool {
+        self.penetrating_vertices == 0 && self.self_intersecting_pairs == 0
+    }
+}
+
+/// Runs `tailor check`: exit 0 clean, 1 found, 2 cannot check.
+///
+/// # Errors
+/// Never: problems with the input are printed and give exit status 2.
+pub fn run(args: &Args) -> Result<ExitCode> {
+    match check(args) {
+        Ok(true) => Ok(ExitCode::SUCCESS),
+        Ok(false) => Ok(ExitCode::from(1)),
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            Ok(ExitCode::from(2))
+        }
+    }
+}
+
+/// Checks every frame, prints the summary, writes the report; `true` when clean.
+fn check(args: &Args) -> Result<bool> {
+    if !(args.thickness >= 0.0 && args.thickness.is_finite()) {
+        bail!(
+            "--thickness must be a finite number >= 0, not {}",
+            args.thickness
+        );
+    }
+    let frames = frames(args)?;
+    let mut cloth = Reuse::default();
+    let mut body = Reuse::default();
+    let mut warned_open = false;
+    let mut rows = Vec::with_capacity(frames.len());
+    let mut total = Findings::default();
+    for (frame, cloth_path, body_path) in &frames {
+        let cloth_mesh = polymesh_obj::read(cloth_path)?;
+        let cloth_h = cloth.hierarchy(&cloth_mesh, cloth_path)?;
+        let mut found = Findings {
+            self_intersecting_pairs: cloth_h.self_intersections().len(),
+            ..Findings::default()
+        };
+        if let Some(body_path) = body_path {
+            let body_mesh = polymesh_obj::read(body_path)?;
+            let body_h = body.hierarchy(&body_mesh, body_path)?;
+            if !body_h.is_closed() && !warned_open {
+                eprintln!(
+                    "warning: {} is not closed, so it has no inside; only cloth vertices closer \
+                     than the thickness ({}) are counted",
+                    body_path.display(),
+                    args.thickness
+                );
+                warned_open = true;
+            }
+            let clearance = clearances(body_h, &cloth_mesh, args.thickness).with_context(|| {
+                format!(
+                    "checking {} against {}",
+                    cloth_path.display(),
+                    body_path.display()
+                )
+            })?;
+            for gap in clearance.into_iter().filter(|&g| g < args.thickness) {
+                found.penetrating_vertices += 1;
+                found.max_penetration = found.max_penetration.max(args.thickness - gap);
+            }
+        }
+        total.penetrating_vertices += found.penetrating_vertices;
+        total.max_penetration = total.max_penetration.max(found.max_penetration);
+        total.self_intersecting_pairs += found.self_intersecting_pairs;
+        if frames.len() > 1 {
+            println!("{}", line(&format!("frame {frame}"), &found));
+        }
+        rows.push((*frame, found));
+    }
+    println!(
+        "{}",
+        line(&format!("{} frame(s) checked", frames.len()), &total)
+    );
+    if let Some(path) = &args.json {
+        let report = json!({
+            "frames": rows.iter().map(|(frame, f)| {
+                let mut row = f.json();
+                row["frame"] = json!(frame);
+                row
+            }).collect::<Vec<_>>(),
+            "total": total.json(),
+        });
+        let text = serde_json::to_string_pretty(&report)?;
+        fs::write(path, text + "\n").with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(total.is_clean())
+}
+
+/// The frames to check: `(frame, cloth file, body file)`; a single file is frame 0.
+fn frames(args: &Args) -> Result<Vec<(u32, PathBuf, Option<PathBuf>)>> {
+    let body_pattern = args.against.as_deref().and_then(Pattern::parse);
+    let body_for = |frame: u32| match (&body_pattern, &args.against) {
+        (Some(pattern), _) => Some(pattern.path(frame)),
+        (None, body) => body.clone(),
+    };
+    let Some(pattern) = Pattern::parse(&args.cloth) else {
+        return Ok(vec![(0, args.cloth.clone(), body_for(0))]);
+    };
+    let numbers = pattern.frames()?;
+    if numbers.is_empty() {
+        bail!("no file matches {}", args.cloth.display());
+    }
+    Ok(numbers
+        .into_iter()
+        .map(|n| (n, pattern.path(n), body_for(n)))
+        .collect())
+}
+
+/// For each cloth vertex, its signed distance to a closed body (negative inside) or, for an
+/// open body, its distance when closer than `thickness` (infinite otherwise).
+fn clearances(body: &Hierarchy, cloth: &PolyMesh, thickness: f64) -> Result<Vec<f64>> {
+    if body.is_closed() {
+        return Ok(body.signed_distances(&cloth.positions)?);
+    }
+    let closest = body.closest_points(&cloth.positions, thickness)?;
+    Ok(closest
+        .iter()
+        .map(|c| c.map_or(f64::INFINITY, |c| c.distance))
+        .collect())
+}
+
+fn line(what: &str, f: &Findings) -> String {
+    format!(
+        "{what}: {} penetrating vertices (deepest {:.6} m), {} self-intersecting face pairs",
+        f.penetrating_vertices, f.max_penetration, f.self_intersecting_pairs
+    )
+}
+
+/// A hierarchy kept across frames while the topology stays the same.
+#[derive(Default)]
+struct Reuse {
+    built: Option<(Vec<u32>, Vec<u32>, Hierarchy)>,
+}
+
+impl Reuse {
+    /// The hierarchy of `mesh`: refit when the faces match the previous frame, else rebuilt.
+    fn hierarchy(&mut self, mesh: &PolyMesh, path: &Path) -> Result<&Hierarchy> {
+        let context = || format!("checking {}", path.display());
+        let built = match self.built.take() {
+            Some((offsets, vertices, mut h))
+                if offsets == mesh.face_offsets
+                    && vertices == mesh.face_vertices
+                    && h.vertex_count() == mesh.positions.len() =>
+            {
+                h.refit(&mesh.positions, 0.0).with_context(context)?;
+                (offsets, vertices, h)
+            }
+            _ => {
+                let h = Hierarchy::build(&mesh.positions, &mesh.face_offsets, &mesh.face_vertices)
+                    .with_context(context)?;
+                (mesh.face_offsets.clone(), mesh.face_vertices.clone(), h)
+            }
+        };
+        Ok(&self.built.insert(built).2)
+    }
+}

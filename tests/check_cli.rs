@@ -1,0 +1,194 @@
+//! End-to-end tests of `tailor check`: a clean cloth exits 0, a penetrating or self-intersecting
+//! one exits 1 with hand-counted findings in the JSON report, and input that cannot be checked
+//! exits 2 with a message naming the file.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A fresh directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("check_cli_{name}"));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    fs::write(&path, text).unwrap();
+    path
+}
+
+fn tailor(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tailor"))
+        .arg("check")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The unit cube `[0, 1]³`, six outward quads.
+const CUBE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\
+f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+
+/// A 2 × 2 sheet of quads at height `z` over the grid `xs × ys`.
+fn sheet(xs: [f64; 3], ys: [f64; 3], z: f64) -> String {
+    let mut text = String::new();
+    for y in ys {
+        for x in xs {
+            text += &format!("v {x} {y} {z}\n");
+        }
+    }
+    for j in 0..2 {
+        for i in 0..2 {
+            let v = j * 3 + i + 1;
+            text += &format!("f {} {} {} {}\n", v, v + 1, v + 4, v + 3);
+        }
+    }
+    text
+}
+
+/// Above the cube: clean.
+fn clean_sheet() -> String {
+    sheet([0.0, 0.5, 1.0], [0.0, 0.5, 1.0], 1.5)
+}
+
+/// At height 0.9 over x ∈ {0.2, 0.6, 1.4}, y ∈ {0.3, 0.5, 1.7}: the four vertices with x < 1
+/// and y < 1 are inside the cube, each 0.1 below its top face, nearer than any side.
+fn sunk_sheet() -> String {
+    sheet([0.2, 0.6, 1.4], [0.3, 0.5, 1.7], 0.9)
+}
+
+/// Two quads crossing through each other, sharing no vertex: one self-intersecting pair.
+const CROSSED: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+v 0.5 0.2 -0.5\nv 0.5 0.8 -0.5\nv 0.5 0.8 0.5\nv 0.5 0.2 0.5\nf 1 2 3 4\nf 5 6 7 8\n";
+
+/// Runs `tailor check ARGS --json DIR/report.json`, asserts the exit code and returns the
+/// report.
+fn report(dir: &Path, args: &[&Path], options: &[&str], code: i32) -> serde_json::Value {
+    let json = dir.join("report.json");
+    let mut all: Vec<&str> = args.iter().map(|p| p.to_str().unwrap()).collect();
+    all.extend(options);
+    all.extend(["--json", json.to_str().unwrap()]);
+    let out = tailor(&all);
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&fs::read_to_string(json).unwrap()).unwrap()
+}
+
+#[test]
+fn clean_cloth_exits_0() {
+    let dir = scratch("clean");
+    let cloth = write(&dir, "cloth.obj", &clean_sheet());
+    let body = write(&dir, "body.obj", CUBE);
+    let r = report(&dir, &[&cloth, Path::new("--against"), &body], &[], 0);
+    assert_eq!(r["total"]["penetrating_vertices"], 0);
+    assert_eq!(r["total"]["self_intersecting_pairs"], 0);
+    assert_eq!(r["frames"].as_array().unwrap().len(), 1);
+}
+
+#[test]
+fn penetrating_cloth_exits_1_with_counts() {
+    let dir = scratch("penetrating");
+    let cloth = write(&dir, "cloth.obj", &sunk_sheet());
+    let body = write(&dir, "body.obj", CUBE);
+    let args: [&Path; 3] = [&cloth, Path::new("--against"), &body];
+    let r = report(&dir, &args, &["--thickness", "0"], 1);
+    assert_eq!(r["total"]["penetrating_vertices"], 4);
+    assert!((r["total"]["max_penetration"].as_f64().unwrap() - 0.1).abs() < 1e-12);
+    assert_eq!(r["frames"][0]["penetrating_vertices"], 4);
+    // A clearance of 0.05 adds to the depth but catches no outside vertex (the nearest is
+    // 0.4 away).
+    let r = report(&dir, &args, &["--thickness", "0.05"], 1);
+    assert_eq!(r["total"]["penetrating_vertices"], 4);
+    assert!((r["total"]["max_penetration"].as_f64().unwrap() - 0.15).abs() < 1e-12);
+    let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("4 penetrating vertices"));
+}
+
+#[test]
+fn self_intersecting_cloth_exits_1() {
+    let dir = scratch("crossed");
+    let cloth = write(&dir, "cloth.obj", CROSSED);
+    let r = report(&dir, &[&cloth], &[], 1);
+    assert_eq!(r["total"]["self_intersecting_pairs"], 1);
+    assert_eq!(r["total"]["penetrating_vertices"], 0);
+}
+
+#[test]
+fn sequences_are_checked_frame_by_frame() {
+    let dir = scratch("sequence");
+    write(&dir, "cloth_0001.obj", &clean_sheet());
+    write(&dir, "cloth_0002.obj", &sunk_sheet());
+    write(&dir, "cloth_0003.obj", &clean_sheet());
+    for frame in 1..=3 {
+        write(&dir, &format!("body_{frame:04}.obj"), CUBE);
+    }
+    let cloth = dir.join("cloth_####.obj");
+    let body = dir.join("body_####.obj");
+    let r = report(&dir, &[&cloth, Path::new("--against"), &body], &[], 1);
+    let frames = r["frames"].as_array().unwrap();
+    let column =
+        |key: &str| -> Vec<u64> { frames.iter().map(|f| f[key].as_u64().unwrap()).collect() };
+    assert_eq!(column("frame"), vec![1, 2, 3]);
+    assert_eq!(column("penetrating_vertices"), vec![0, 4, 0]);
+    assert_eq!(r["total"]["penetrating_vertices"], 4);
+
+    // A missing body frame cannot be checked.
+    fs::remove_file(dir.join("body_0003.obj")).unwrap();
+    let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("body_0003.obj"));
+}
+
+#[test]
+fn open_body_is_checked_by_distance_with_a_warning() {
+    let dir = scratch("open");
+    let cloth = write(&dir, "cloth.obj", &sunk_sheet());
+    // Only the cube's top face: the sheet lies 0.1 below it.
+    let body = write(
+        &dir,
+        "lid.obj",
+        "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 1 2 3 4\n",
+    );
+    let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not closed"));
+    let out = tailor(&[
+        cloth.to_str().unwrap(),
+        "--against",
+        body.to_str().unwrap(),
+        "--thickness",
+        "0.2",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("4 penetrating vertices"));
+}
+
+#[test]
+fn unreadable_input_exits_2_naming_the_file() {
+    let dir = scratch("unreadable");
+    let missing = dir.join("nowhere.obj");
+    let out = tailor(&[missing.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nowhere.obj"));
+
+    let nan = write(&dir, "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 NaN 0\nf 1 2 3\n");
+    let out = tailor(&[nan.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("nan.obj") && err.contains("line 3"), "{err}");
+
+    let cloth = write(&dir, "cloth.obj", &clean_sheet());
+    let out = tailor(&[cloth.to_str().unwrap(), "--against", nan.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nan.obj"));
+
+    let out = tailor(&[cloth.to_str().unwrap(), "--thickness", "-1"]);
+    assert_eq!(out.status.code(), Some(2));
+}
