@@ -1,1 +1,97 @@
-//! placeholder
+//! Cloth simulated on the control points of a subdivision surface, as in Pixar's *Geri's Game*
+//! (DeRose, Kass & Truong, "Subdivision Surfaces in Character Animation", SIGGRAPH 1998, §5).
+//!
+//! The garment's control mesh is a mass-spring system ([`Model`]): particles at the control
+//! vertices with lumped masses, and the paper's energies — stretch on edges (eq. 4), shear on
+//! quad diagonals (eq. 5), bend along threads (eq. 6–7) — plus the lesson's spring dampers
+//! (`../shared/background/mass-spring-lesson.txt`, eq. 1–7), gravity and air drag.
+//! The [`Simulator`] advances it with Baraff & Witkin's implicit backward Euler ("Large Steps
+//! in Cloth Simulation", SIGGRAPH 1998): one linear solve per step — or several Newton
+//! iterations with a line search — by conjugate gradients on a block-sparse matrix, with pins,
+//! attachments and contact planes enforced exactly by the constraint filter.
+//!
+//! Layers, as in the rest of tailor: [`energy`] holds the pure element rules (energies,
+//! gradients, PSD-projected Hessians); [`model`] and [`threads`] the tables built once from the
+//! topology; the assembly, [`matrix`], [`pcg`] and [`simulator`] the per-step evaluation.
+//! Collisions plug in later through [`Simulator::set_contacts`], the per-vertex plane
+//! constraints the solver already honours.
+#![warn(missing_docs)]
+
+mod assemble;
+pub mod constraint;
+pub mod energy;
+mod error;
+pub mod material;
+pub mod matrix;
+pub mod model;
+pub mod pcg;
+mod reduce;
+pub mod shapes;
+pub mod simulator;
+pub mod threads;
+
+pub use constraint::{Attachment, Contact, Motion};
+pub use error::{ClothError, StepFailure};
+pub use material::Material;
+pub use model::{Model, Stiffness};
+pub use simulator::{Settings, Simulator, State, StepReport};
+
+#[cfg(test)]
+pub(crate) mod testing {
+    //! Deterministic random numbers and an irregular garment for tests.
+    use crate::energy::Vec3;
+    use tailor_subdiv::{Mesh, Point};
+
+    /// xorshift64*: small, deterministic, good enough for test perturbations.
+    pub struct Rng(u64);
+
+    impl Rng {
+        pub fn new(seed: u64) -> Self {
+            Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+        }
+
+        /// Uniform in [0, 1).
+        pub fn unit(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+            lo + (hi - lo) * self.unit()
+        }
+
+        /// Each coordinate uniform in [−1, 1).
+        pub fn vec3(&mut self) -> Vec3 {
+            Vec3::new(
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+            )
+        }
+    }
+
+    /// A bumpy 5 × 4 grid of quads with one quad split into triangles and two merged into a
+    /// hexagon: valences 3, 4 and 5, every face size the model treats differently.
+    pub fn irregular_mesh(rng: &mut Rng) -> Mesh {
+        let positions = (0..4)
+            .flat_map(|j| (0..5).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                let base = Point::new(f64::from(i), 0.0, f64::from(j));
+                base + Vec3::new(0.1, 0.3, 0.1).component_mul(&rng.vec3())
+            })
+            .collect();
+        let mut faces: Vec<Vec<u32>> =
+            vec![vec![0, 5, 6], vec![0, 6, 1], vec![7, 12, 13, 14, 9, 8]];
+        for j in 0..3 {
+            for i in 0..4 {
+                let a = i + 5 * j;
+                if a != 0 && a != 7 && a != 8 {
+                    faces.push(vec![a, a + 5, a + 6, a + 1]);
+                }
+            }
+        }
+        Mesh::from_polygons(positions, &faces).unwrap()
+    }
+}

@@ -1,0 +1,284 @@
+//! Behaviour of whole simulations: invariants a correct integrator keeps.
+//!
+//! A hanging strip settles at the analytic stretch of its springs; symplectic Euler without
+//! damping conserves energy; damped implicit steps lose it; pins, attachments and contact
+//! planes hold exactly; the frame rate does not change the physics; the thread count does not
+//! change a single bit; a solve that cannot succeed ends in a typed error, never NaN.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use tailor_cloth::shapes::sheet;
+use tailor_cloth::{
+    Attachment, ClothError, Contact, Material, Model, Motion, Settings, Simulator, State,
+    StepFailure,
+};
+
+const FRAME: f64 = 1.0 / 24.0;
+
+/// Material with only stretch (and optional damping): no shear, bend or drag.
+fn springs_only(stretch: f64, damping: f64) -> Material {
+    Material {
+        density: 0.2,
+        stretch,
+        compression: stretch,
+        shear: 0.0,
+        bend: 0.0,
+        damping,
+        drag: 0.0,
+    }
+}
+
+/// An n × n curtain of 1 m, pinned at the two corners of its first row, falling from flat.
+fn curtain(n: u32, settings: Settings) -> (Simulator, State) {
+    let model = Model::new(&sheet(n, n, 1.0, 1.0), &Material::COTTON).unwrap();
+    let mut sim = Simulator::new(model, settings).unwrap();
+    sim.pin(&[0, n - 1], Motion::Fixed).unwrap();
+    let state = State::at_rest(sim.model());
+    (sim, state)
+}
+
+#[test]
+fn hanging_strip_settles_at_the_analytic_stretch() {
+    // Two columns of 11 vertices, 0.1 m apart, hanging along −z from the top row.
+    let (rows, spacing, width) = (11u32, 0.1, 0.1);
+    let material = springs_only(50.0, 0.02);
+    let model = Model::new(
+        &sheet(2, rows, width, spacing * f64::from(rows - 1)),
+        &material,
+    )
+    .unwrap();
+    let g = 9.81;
+    let settings = Settings {
+        gravity: Vector3::new(0.0, 0.0, -g),
+        cg_tolerance: 1e-10,
+        ..Settings::default()
+    };
+    let mut sim = Simulator::new(model, settings).unwrap();
+    sim.pin(&[2 * (rows - 1), 2 * (rows - 1) + 1], Motion::Fixed)
+        .unwrap();
+    let mut state = State::at_rest(sim.model());
+    for _ in 0..240 {
+        sim.step(&mut state, FRAME).unwrap();
+    }
+    // Side edges carry the weight below them; each has half a quad beside it, so its E_s weight
+    // is Y·(w·L/2) and its tension k ε / L. Masses: ρ·w·L/4 at the bottom, ρ·w·L/2 above.
+    let k = material.stretch * width * spacing / 2.0;
+    let (bottom, middle) = (
+        material.density * width * spacing / 4.0,
+        material.density * width * spacing / 2.0,
+    );
+    let p = &state.positions;
+    for j in 0..rows - 1 {
+        let weight = g * (bottom + f64::from(j) * middle);
+        let expected = weight * spacing / k;
+        for column in 0..2 {
+            let (a, b) = ((2 * j + column) as usize, (2 * (j + 1) + column) as usize);
+            let strain = (p[b] - p[a]).norm() / spacing - 1.0;
+            assert!(
+                (strain - expected).abs() < 1e-4 * expected.max(1e-3),
+                "edge {j}: {strain} vs {expected}"
+            );
+        }
+    }
+    assert!(state.velocities.iter().all(|v| v.norm() < 1e-6));
+}
+
+#[test]
+fn undamped_symplectic_steps_conserve_energy() {
+    let model = Model::new(&sheet(6, 6, 1.0, 1.0), &springs_only(100.0, 0.0)).unwrap();
+    let settings = Settings {
+        max_substep: 2e-4,
+        gravity: Vector3::zeros(),
+        ..Settings::default()
+    };
+    let mut sim = Simulator::new(model, settings).unwrap();
+    let mut state = State::at_rest(sim.model());
+    for (i, (p, v)) in state
+        .positions
+        .iter_mut()
+        .zip(&mut state.velocities)
+        .enumerate()
+    {
+        p.x *= 1.1;
+        v.y = 0.3 * ((i * 7 % 5) as f64 - 2.0);
+    }
+    let start = sim.energy(&state);
+    for _ in 0..12 {
+        let report = sim.step_symplectic(&mut state, FRAME).unwrap();
+        assert!(
+            (report.energy - start).abs() < 5e-3 * start,
+            "{} vs {start}",
+            report.energy
+        );
+    }
+}
+
+#[test]
+fn damped_implicit_steps_lose_energy_monotonically() {
+    let model = Model::new(&sheet(9, 9, 1.0, 1.0), &Material::COTTON).unwrap();
+    let mut sim = Simulator::new(model, Settings::default()).unwrap();
+    sim.pin(&[0, 8], Motion::Fixed).unwrap();
+    let mut state = State::at_rest(sim.model());
+    let mut last = sim.energy(&state);
+    for frame in 0..48 {
+        let report = sim.step(&mut state, FRAME).unwrap();
+        assert!(
+            report.energy < last,
+            "frame {frame}: {} after {last}",
+            report.energy
+        );
+        last = report.energy;
+    }
+}
+
+#[test]
+fn pins_and_attachments_are_exact() {
+    let n = 8;
+    let (mut sim, mut state) = curtain(n, Settings::default());
+    let swing = Motion::Script(std::sync::Arc::new(|t: f64| {
+        Isometry3::from_parts(
+            Translation3::new(0.3 * t, 0.0, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.5 * t, 0.0),
+        )
+    }));
+    sim.pin(&[n - 1], swing.clone()).unwrap();
+    let attached = n * n - 1;
+    let start = sim.model().rest_positions()[attached as usize];
+    let velocity = Vector3::new(0.0, 0.5, 0.0);
+    sim.set_attachment_targets(
+        0.0,
+        &[Attachment {
+            vertex: attached,
+            position: start,
+            velocity,
+        }],
+    )
+    .unwrap();
+    for _ in 0..24 {
+        sim.step(&mut state, FRAME).unwrap();
+        let rest = sim.model().rest_positions();
+        let p = &state.positions;
+        assert!((p[0] - rest[0]).norm() <= 1e-12);
+        let goal = swing.at(state.time) * rest[n as usize - 1];
+        assert!((p[n as usize - 1] - goal).norm() <= 1e-12);
+        let goal = start + velocity * state.time;
+        assert!((p[attached as usize] - goal).norm() <= 1e-12);
+    }
+}
+
+#[test]
+fn contact_planes_hold_the_normal_velocity() {
+    let (mut sim, mut state) = curtain(6, Settings::default());
+    let up = Vector3::y();
+    let contacts: Vec<Contact> = (6..36)
+        .map(|vertex| Contact {
+            vertex,
+            normal: up,
+            velocity: Vector3::zeros(),
+        })
+        .collect();
+    sim.set_contacts(&contacts).unwrap();
+    state.velocities.iter_mut().for_each(|v| v.x = 0.2);
+    for _ in 0..6 {
+        sim.step(&mut state, FRAME).unwrap();
+    }
+    for c in &contacts {
+        let i = c.vertex as usize;
+        assert!(
+            state.positions[i].y.abs() < 1e-12,
+            "vertex {i} left its plane"
+        );
+        assert!(state.velocities[i].y.abs() < 1e-12);
+    }
+    assert!(state.positions[20].x > sim.model().rest_positions()[20].x + 1e-3);
+}
+
+#[test]
+fn frame_rate_does_not_change_the_drape() {
+    let settings = Settings {
+        max_substep: 1.0 / 240.0,
+        ..Settings::default()
+    };
+    let run = |frames: u32, fps: f64| {
+        let (mut sim, mut state) = curtain(10, settings);
+        for _ in 0..frames {
+            sim.step(&mut state, 1.0 / fps).unwrap();
+        }
+        state
+    };
+    let (a, b) = (run(24, 24.0), run(48, 48.0));
+    assert!((a.time - 1.0).abs() < 1e-12 && (b.time - 1.0).abs() < 1e-12);
+    let worst = a
+        .positions
+        .iter()
+        .zip(&b.positions)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0, f64::max);
+    assert!(worst < 0.01, "drapes differ by {worst} m");
+    let fell = a.positions.iter().map(|p| -p.y).fold(0.0, f64::max);
+    assert!(fell > 0.3, "the curtain did not fall ({fell} m)");
+}
+
+#[test]
+fn thread_count_does_not_change_a_bit() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let (mut sim, mut state) = curtain(16, Settings::default());
+            for _ in 0..4 {
+                sim.step(&mut state, FRAME).unwrap();
+            }
+            state
+        })
+    };
+    let (one, two) = (run(1), run(2));
+    let bits = |s: &State| -> Vec<u64> {
+        s.positions
+            .iter()
+            .flat_map(|p| p.iter().copied())
+            .chain(s.velocities.iter().flat_map(|v| v.iter().copied()))
+            .map(f64::to_bits)
+            .collect()
+    };
+    assert_eq!(bits(&one), bits(&two));
+}
+
+#[test]
+fn newton_with_line_search_takes_large_steps() {
+    let settings = Settings {
+        max_substep: FRAME,
+        newton_iterations: 4,
+        line_search: true,
+        ..Settings::default()
+    };
+    let (mut sim, mut state) = curtain(8, settings);
+    for _ in 0..24 {
+        let report = sim.step(&mut state, FRAME).unwrap();
+        assert_eq!(report.substeps, 1);
+        assert!(report.max_strain < 0.1, "strain {}", report.max_strain);
+    }
+}
+
+#[test]
+fn an_impossible_solve_is_a_typed_error_not_nan() {
+    let settings = Settings {
+        cg_max_iterations: 0,
+        max_halvings: 2,
+        ..Settings::default()
+    };
+    let (mut sim, mut state) = curtain(5, settings);
+    let before = state.clone();
+    let err = sim.step(&mut state, FRAME).unwrap_err();
+    assert!(matches!(
+        err,
+        ClothError::StepFailed { reason: StepFailure::SolverDiverged, time, step }
+            if time == 0.0 && (step - FRAME / 5.0 / 4.0).abs() < 1e-15
+    ));
+    assert_eq!(state, before);
+    assert!(matches!(
+        sim.step(&mut state, f64::NAN),
+        Err(ClothError::BadValue { .. })
+    ));
+}
