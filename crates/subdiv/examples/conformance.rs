@@ -22,7 +22,11 @@ fn main() -> ExitCode {
     for o in outcomes.iter().filter(|o| o.failure.is_some()) {
         println!("{o}");
     }
-    println!("{passed} passed, {} failed", outcomes.len() - passed);
+    println!(
+        "conformance: {passed} of {} reference files match OpenSubdiv ({} differ)",
+        outcomes.len(),
+        outcomes.len() - passed
+    );
     if passed == outcomes.len() {
         ExitCode::SUCCESS
     } else {
