@@ -14,6 +14,8 @@
 //! Sharpness decays (uniform or Chaikin, see [`crate::rules::crease`]); holes, non-manifold
 //! flags and sharpness propagate from parent to child components.
 
+use std::sync::OnceLock;
+
 use rayon::prelude::*;
 
 use crate::mesh::to_u32;
@@ -23,17 +25,35 @@ use crate::rules::masks::{self, EdgeMask, Mask, VertexNeighbourhood};
 use crate::sparse::{CHUNK, Primvar, SparseRows};
 use crate::topology::{Csr, Level};
 
-/// A refinement step: the child level and the weights of its vertices.
-#[derive(Clone, Debug)]
+/// A refinement step: the child level, and (built on first use) the weights of its vertices.
+///
+/// Direct refinement ([`Refinement::apply`]) computes each mask on the fly, as OpenSubdiv's
+/// `PrimvarRefiner` does, so refining positions once never stores a weight; stencil tables and
+/// face-varying data ask for the table ([`Refinement::weights`]), which is then kept.
+#[derive(Debug)]
 pub struct Refinement {
     /// The refined level.
     pub child: Level,
-    /// One row per child vertex. A column below the parent's vertex count names a parent
-    /// vertex; a column `c` at or above it names the child vertex `c − parent vertex count`,
-    /// always a face point (vertex and edge points use face points, as OpenSubdiv's masks do).
-    pub weights: SparseRows,
     /// Where each kind of child vertex starts.
     pub layout: ChildLayout,
+    options: Options,
+    weights: OnceLock<SparseRows>,
+}
+
+impl Clone for Refinement {
+    fn clone(&self) -> Self {
+        Self {
+            child: self.child.clone(),
+            layout: self.layout,
+            options: self.options,
+            weights: self
+                .weights
+                .get()
+                .cloned()
+                .map(OnceLock::from)
+                .unwrap_or_default(),
+        }
+    }
 }
 
 /// Index ranges of the three kinds of child vertices: `[0, faces)` vertex points,
@@ -65,23 +85,107 @@ impl ChildLayout {
 }
 
 impl Refinement {
-    /// Refines `parent` once.
+    /// Refines the topology of `parent` once.
     #[must_use]
     pub fn new(parent: &Level, options: &Options) -> Self {
         let layout = ChildLayout::new(parent);
         let child = child_topology(parent, layout, options.crease_method);
-        let weights = vertex_weights(parent, &child, layout, options);
         Self {
             child,
-            weights,
             layout,
+            options: *options,
+            weights: OnceLock::new(),
         }
     }
 
-    /// Computes the child level's values from the parent's: face points first, then vertex and
-    /// edge points, each in parallel over rows.
-    pub fn apply<T: Primvar>(&self, parent: &[T], child: &mut [T]) {
-        apply_two_phase(&self.weights, self.layout, parent, child);
+    /// One row per child vertex, over `parent` (the level this step refined). A column below
+    /// the parent's vertex count names a parent vertex; a column `c` at or above it names the
+    /// child vertex `c − parent vertex count`, always a face point (vertex and edge points use
+    /// face points, as OpenSubdiv's masks do). Built on first call, then kept.
+    pub fn weights(&self, parent: &Level) -> &SparseRows {
+        self.weights
+            .get_or_init(|| vertex_weights(parent, &self.child, self.layout, &self.options))
+    }
+
+    /// Computes the child level's values from the parent's (`parent_level` is the level this
+    /// step refined): face points first, then vertex and edge points, each in parallel, with
+    /// the masks computed on the fly.
+    pub fn apply<T: Primvar>(&self, parent_level: &Level, parent: &[T], child: &mut [T]) {
+        if let Some(w) = self.weights.get() {
+            apply_two_phase(w, self.layout, parent, child);
+            return;
+        }
+        let (p, c, layout, options) = (parent_level, &self.child, self.layout, &self.options);
+        let np = p.vertex_count;
+        let (vertex_points, rest) = child.split_at_mut(layout.faces);
+        let (face_points, edge_points) = rest.split_at_mut(layout.edges - layout.faces);
+        face_points
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(k, out)| {
+                for (i, d) in out.iter_mut().enumerate() {
+                    let fv = p.face_verts.row(k * CHUNK + i);
+                    let w = 1.0 / fv.len() as f64;
+                    let mut acc = T::zero();
+                    for &v in fv {
+                        acc.add_scaled(&parent[v as usize], w);
+                    }
+                    *d = acc;
+                }
+            });
+        let face_points = &*face_points;
+        let face_point = |f: usize| to_u32(np + layout.faces + f);
+        let fill =
+            |out: &mut [T], row: &(dyn Fn(usize, &mut Scratch, &mut Gather<'_, T>) + Sync)| {
+                out.par_chunks_mut(CHUNK).enumerate().for_each_init(
+                    Scratch::default,
+                    |s, (k, out)| {
+                        for (i, d) in out.iter_mut().enumerate() {
+                            let mut g = Gather {
+                                parent,
+                                face_points,
+                                np,
+                                first_face: layout.faces,
+                                acc: T::zero(),
+                            };
+                            row(k * CHUNK + i, s, &mut g);
+                            *d = g.acc;
+                        }
+                    },
+                );
+            };
+        fill(vertex_points, &|v, s, g| {
+            vertex_row(p, c, options.crease_method, v, &face_point, s, g)
+        });
+        fill(edge_points, &|e, s, g| {
+            edge_row(p, c, layout, options, e, &face_point, s, g)
+        });
+    }
+}
+
+/// Where a mask's weights go: a table row being written, or a value being accumulated.
+trait RowSink {
+    fn push(&mut self, col: u32, weight: f64);
+}
+
+/// Accumulates a row's weighted values directly (columns as in [`Refinement::weights`]).
+struct Gather<'a, T> {
+    parent: &'a [T],
+    face_points: &'a [T],
+    np: usize,
+    first_face: usize,
+    acc: T,
+}
+
+impl<T: Primvar> RowSink for Gather<'_, T> {
+    fn push(&mut self, col: u32, weight: f64) {
+        let col = col as usize;
+        let v = if col < self.np {
+            &self.parent[col]
+        } else {
+            &self.face_points[col - self.np - self.first_face]
+        };
+        self.acc.add_scaled(v, weight);
     }
 }
 
@@ -387,7 +491,7 @@ fn child_tags(p: &Level, layout: ChildLayout, method: CreaseMethod, c: &mut Leve
     c.assign_rules();
 }
 
-/// The weights of every child vertex (see [`Refinement::weights`]), built in parallel chunks.
+/// The weights of every child vertex (see [`Refinement::weights`]), built in parallel.
 fn vertex_weights(p: &Level, c: &Level, layout: ChildLayout, options: &Options) -> SparseRows {
     let np = p.vertex_count;
     let face_point = |f: usize| to_u32(np + layout.faces + f);
@@ -436,7 +540,7 @@ struct Row<'a> {
     next: usize,
 }
 
-impl Row<'_> {
+impl RowSink for Row<'_> {
     fn push(&mut self, col: u32, weight: f64) {
         self.cols[self.next] = col;
         self.weights[self.next] = weight;
@@ -453,7 +557,7 @@ fn edge_row(
     e: usize,
     face_point: &dyn Fn(usize) -> u32,
     s: &mut Scratch,
-    out: &mut Row<'_>,
+    out: &mut impl RowSink,
 ) {
     let faces = p.edge_faces.row(e);
     s.sizes.clear();
@@ -496,7 +600,7 @@ fn vertex_row(
     v: usize,
     face_point: &dyn Fn(usize) -> u32,
     s: &mut Scratch,
-    out: &mut Row<'_>,
+    out: &mut impl RowSink,
 ) {
     let edges = p.vert_edges.row(v);
     let corners = p.face_verts.items.len();

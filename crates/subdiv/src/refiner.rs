@@ -96,9 +96,9 @@ impl Refiner {
     #[must_use]
     pub fn refine<T: Primvar>(&self, control: &[T]) -> Vec<T> {
         let mut current = control.to_vec();
-        for step in &self.steps {
+        for (l, step) in self.steps.iter().enumerate() {
             let mut next = vec![T::zero(); step.child.vertex_count];
-            step.apply(&current, &mut next);
+            step.apply(self.level(l), &current, &mut next);
             current = next;
         }
         current
@@ -108,8 +108,8 @@ impl Refiner {
     #[must_use]
     pub fn stencils(&self) -> StencilTable {
         let mut table = StencilTable::identity(self.base.vertex_count);
-        for step in &self.steps {
-            table = table.refine(step);
+        for (l, step) in self.steps.iter().enumerate() {
+            table = table.refine(self.level(l), step);
         }
         table
     }

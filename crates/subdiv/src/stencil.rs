@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use crate::mesh::to_u32;
 use crate::refine::Refinement;
 use crate::sparse::{CHUNK, Primvar, SparseRows};
+use crate::topology::Level;
 
 /// Rows of weights over the control points.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -58,21 +59,23 @@ impl StencilTable {
         self.rows.apply(control, out);
     }
 
-    /// The stencils of a refinement's child level, given this table for its parent level.
+    /// The stencils of a refinement's child level, given this table for its parent level
+    /// (`parent` is the level the step refined).
     #[must_use]
-    pub fn refine(&self, step: &Refinement) -> Self {
+    pub fn refine(&self, parent: &Level, step: &Refinement) -> Self {
+        let weights = step.weights(parent);
         let layout = step.layout;
         let np = self.len();
         let n = self.control_points;
         let face_rows = compose_rows(n, layout.faces..layout.edges, &|row, acc| {
-            let (cols, ws) = step.weights.row(row);
+            let (cols, ws) = weights.row(row);
             for (&c, &w) in cols.iter().zip(ws) {
                 acc.add_row(&self.rows, c as usize, w);
             }
         });
         let other = |range: std::ops::Range<usize>| {
             compose_rows(n, range, &|row, acc| {
-                let (cols, ws) = step.weights.row(row);
+                let (cols, ws) = weights.row(row);
                 for (&c, &w) in cols.iter().zip(ws) {
                     let c = c as usize;
                     if c < np {

@@ -83,7 +83,7 @@ impl Step<'_> {
     fn translate(&self, row: usize, value_of: &dyn Fn(u32) -> u32, out: &mut SparseRows) {
         let np = self.parent.vertex_count;
         let first_face = self.refinement.layout.faces;
-        let (cols, ws) = self.refinement.weights.row(row);
+        let (cols, ws) = self.refinement.weights(self.parent).row(row);
         for (&col, &w) in cols.iter().zip(ws) {
             let col = col as usize;
             let mapped = if col >= np {
