@@ -22,7 +22,7 @@ use crate::mesh::to_u32;
 use crate::options::{CreaseMethod, Options};
 use crate::rules::crease;
 use crate::rules::masks::{self, EdgeMask, Mask, VertexNeighbourhood};
-use crate::sparse::{CHUNK, Primvar, SparseRows};
+use crate::sparse::{CHUNK, Primvar, SparseRows, fill_rows, offsets_from_lengths};
 use crate::topology::{Csr, Level};
 
 /// A refinement step: the child level, and (built on first use) the weights of its vertices.
@@ -235,25 +235,33 @@ pub(crate) fn apply_two_phase<T: Primvar>(
 fn child_topology(p: &Level, layout: ChildLayout, method: CreaseMethod) -> Level {
     let corners = p.face_verts.items.len();
     let (nv, nf, ne) = (p.vertex_count, p.face_count(), p.edge_count());
+    let corner_face = corner_faces(p);
     let half = |e: usize, k: usize| to_u32(corners + 2 * e + k);
     let mut c = Level {
         vertex_count: nv + nf + ne,
         face_verts: Csr {
-            offsets: (0..=corners).map(|i| to_u32(4 * i)).collect(),
+            offsets: (0..=corners)
+                .into_par_iter()
+                .map(|i| to_u32(4 * i))
+                .collect(),
             items: vec![0; 4 * corners],
         },
         face_edges: vec![0; 4 * corners],
-        edge_verts: Vec::with_capacity(corners + 2 * ne),
         ..Level::default()
     };
-    // Faces: vertices and edges of each child quad.
-    for f in 0..nf {
-        let range = p.face_verts.range(f);
-        let n = range.len();
-        let fv = &p.face_verts.items[range.clone()];
-        let fe = &p.face_edges[range.clone()];
-        for j in 0..n {
+    // Faces: child i is the quad at corner i of its parent face.
+    c.face_verts
+        .items
+        .par_chunks_mut(4)
+        .zip(c.face_edges.par_chunks_mut(4))
+        .enumerate()
+        .for_each(|(i, (cv, ce))| {
+            let f = corner_face[i] as usize;
+            let range = p.face_verts.range(f);
+            let (n, j) = (range.len(), i - range.start);
             let jp = (j + n - 1) % n;
+            let fv = &p.face_verts.items[range.clone()];
+            let fe = &p.face_edges[range.clone()];
             let corner_in_edge = |e: u32| usize::from(p.edge_verts[e as usize][0] != fv[j]);
             let verts = [
                 layout.of_vertex(fv[j] as usize),
@@ -269,173 +277,204 @@ fn child_topology(p: &Level, layout: ChildLayout, method: CreaseMethod) -> Level
             ];
             // Quads keep the vertex point at index j; other polygons put it first.
             let rot = if n == 4 { j } else { 0 };
-            let base = 4 * (range.start + j);
             for k in 0..4 {
-                c.face_verts.items[base + (k + rot) % 4] = verts[k];
-                c.face_edges[base + (k + rot) % 4] = edges[k];
+                cv[(k + rot) % 4] = verts[k];
+                ce[(k + rot) % 4] = edges[k];
             }
-        }
-    }
-    // Edges: interior edges of faces, then halves of parent edges.
-    for f in 0..nf {
-        for (j, &e) in p.face_edges[p.face_verts.range(f)].iter().enumerate() {
-            let _ = j;
-            c.edge_verts
-                .push([layout.of_face(f), layout.of_edge(e as usize)]);
-        }
-    }
-    for (e, &[a, b]) in p.edge_verts.iter().enumerate() {
-        c.edge_verts
-            .push([layout.of_edge(e), layout.of_vertex(a as usize)]);
-        c.edge_verts
-            .push([layout.of_edge(e), layout.of_vertex(b as usize)]);
-    }
-    child_edge_faces(p, &mut c);
+        });
+    // Edges: interior edges of faces (face point → edge point), then halves of parent edges.
+    c.edge_verts = (0..corners + 2 * ne)
+        .into_par_iter()
+        .map(|i| {
+            if i < corners {
+                [
+                    layout.of_face(corner_face[i] as usize),
+                    layout.of_edge(p.face_edges[i] as usize),
+                ]
+            } else {
+                let (e, k) = ((i - corners) / 2, (i - corners) % 2);
+                [
+                    layout.of_edge(e),
+                    layout.of_vertex(p.edge_verts[e][k] as usize),
+                ]
+            }
+        })
+        .collect();
+    child_edge_faces(p, &corner_face, &mut c);
     child_vertex_faces(p, layout, &mut c);
     child_vertex_edges(p, layout, &mut c);
     child_tags(p, layout, method, &mut c);
     c
 }
 
-/// The child quad at corner `j` of parent face `f`, and the corner of that quad holding a
-/// given role: quads are rotated by `j`, other polygons are not.
+/// The face of every corner of `p` (the inverse of its face offsets).
+fn corner_faces(p: &Level) -> Vec<u32> {
+    let mut out = vec![0u32; p.face_verts.items.len()];
+    let mut unit = vec![(); out.len()];
+    fill_rows(&p.face_verts.offsets, &mut out, &mut unit, |f, row, _| {
+        row.fill(to_u32(f))
+    });
+    out
+}
+
+/// The child quad at corner `j` of parent face `f`.
 fn child_face(p: &Level, f: usize, j: usize) -> u32 {
     to_u32(p.face_verts.offsets[f] as usize + j)
 }
 
-fn child_edge_faces(p: &Level, c: &mut Level) {
+/// Builds a CSR relation with a parallel per-item array (local indices, or `()` for none), row
+/// by row in parallel.
+fn relation<B: Clone + Default + Send>(
+    rows: usize,
+    length: impl Fn(usize) -> usize + Sync,
+    fill: impl Fn(usize, &mut [u32], &mut [B]) + Sync,
+) -> (Csr, Vec<B>) {
+    let offsets = offsets_from_lengths(rows, length);
+    let total = *offsets.last().expect("offsets start at 0") as usize;
+    let (mut items, mut local) = (vec![0u32; total], vec![B::default(); total]);
+    fill_rows(&offsets, &mut items, &mut local, fill);
+    (Csr { offsets, items }, local)
+}
+
+fn child_edge_faces(p: &Level, corner_face: &[u32], c: &mut Level) {
     let corners = p.face_verts.items.len();
-    let mut counts = vec![2u32; corners];
-    counts.extend(
-        p.edge_faces
-            .offsets
-            .windows(2)
-            .flat_map(|w| [w[1] - w[0]; 2]),
-    );
-    c.edge_faces = Csr::with_counts(counts);
-    c.edge_face_local = vec![0; c.edge_faces.items.len()];
-    let mut slot = 0usize;
-    for f in 0..p.face_count() {
-        let n = p.face_verts.range(f).len();
-        for j in 0..n {
-            let jn = (j + 1) % n;
-            let (l0, l1) = if n == 4 { (jn, (jn + 2) % 4) } else { (1, 2) };
-            c.edge_faces.items[slot] = child_face(p, f, j);
-            c.edge_face_local[slot] = to_u32(l0);
-            c.edge_faces.items[slot + 1] = child_face(p, f, jn);
-            c.edge_face_local[slot + 1] = to_u32(l1);
-            slot += 2;
+    let length = |i: usize| {
+        if i < corners {
+            2
+        } else {
+            p.edge_faces.range((i - corners) / 2).len()
         }
-    }
-    for e in 0..p.edge_count() {
-        let ends = p.edge_verts[e];
-        for end in ends {
-            for (k, &pf) in p.edge_faces.row(e).iter().enumerate() {
-                let l = p.edge_face_local[p.edge_faces.offsets[e] as usize + k] as usize;
-                let fr = p.face_verts.range(pf as usize);
+    };
+    (c.edge_faces, c.edge_face_local) =
+        relation(corners + 2 * p.edge_count(), length, |i, faces, local| {
+            if i < corners {
+                // The interior edge between child quads j and j + 1 of a parent face.
+                let f = corner_face[i] as usize;
+                let range = p.face_verts.range(f);
+                let (n, j) = (range.len(), i - range.start);
+                let jn = (j + 1) % n;
+                let (l0, l1) = if n == 4 { (jn, (jn + 2) % 4) } else { (1, 2) };
+                faces.copy_from_slice(&[child_face(p, f, j), child_face(p, f, jn)]);
+                local.copy_from_slice(&[to_u32(l0), to_u32(l1)]);
+                return;
+            }
+            // Half k of parent edge e: in each parent face, the child quad at that end.
+            let (e, k) = ((i - corners) / 2, (i - corners) % 2);
+            let end = p.edge_verts[e][k];
+            for (slot, idx) in p.edge_faces.range(e).enumerate() {
+                let (pf, l) = (
+                    p.edge_faces.items[idx] as usize,
+                    p.edge_face_local[idx] as usize,
+                );
+                let fr = p.face_verts.range(pf);
                 let n = fr.len();
                 let of_edge = usize::from(p.face_verts.items[fr.start + l] != end);
-                c.edge_faces.items[slot] = child_face(p, pf as usize, (l + of_edge) % n);
-                c.edge_face_local[slot] = to_u32(if n == 4 {
+                faces[slot] = child_face(p, pf, (l + of_edge) % n);
+                local[slot] = to_u32(if n == 4 {
                     l
                 } else if of_edge == 1 {
                     3
                 } else {
                     0
                 });
-                slot += 1;
             }
-        }
-    }
+        });
 }
 
 fn child_vertex_faces(p: &Level, layout: ChildLayout, c: &mut Level) {
-    let (nv, nf, ne) = (p.vertex_count, p.face_count(), p.edge_count());
-    let counts = (0..nv)
-        .map(|v| to_u32(p.vert_faces.range(v).len()))
-        .chain((0..nf).map(|f| to_u32(p.face_verts.range(f).len())))
-        .chain((0..ne).map(|e| to_u32(2 * p.edge_faces.range(e).len())));
-    c.vert_faces = Csr::with_counts(counts);
-    c.vert_face_local = vec![0; c.vert_faces.items.len()];
-    let mut slot = 0usize;
-    let mut put = |c: &mut Level, face: u32, local: usize| {
-        c.vert_faces.items[slot] = face;
-        c.vert_face_local[slot] = to_u32(local);
-        slot += 1;
+    let (nv, nf) = (p.vertex_count, p.face_count());
+    debug_assert_eq!((layout.faces, layout.edges), (nv, nv + nf));
+    let length = |i: usize| {
+        if i < nv {
+            p.vert_faces.range(i).len()
+        } else if i < nv + nf {
+            p.face_verts.range(i - nv).len()
+        } else {
+            2 * p.edge_faces.range(i - nv - nf).len()
+        }
     };
-    for v in 0..nv {
-        for i in p.vert_faces.range(v) {
-            let (f, l) = (
-                p.vert_faces.items[i] as usize,
-                p.vert_face_local[i] as usize,
-            );
-            let quad = p.face_verts.range(f).len() == 4;
-            put(c, child_face(p, f, l), if quad { l } else { 0 });
-        }
-    }
-    debug_assert_eq!(layout.faces, nv);
-    for f in 0..nf {
-        let n = p.face_verts.range(f).len();
-        for j in 0..n {
-            put(c, child_face(p, f, j), if n == 4 { (j + 2) % 4 } else { 2 });
-        }
-    }
-    for e in 0..ne {
-        for i in p.edge_faces.range(e) {
-            let (f, l) = (
-                p.edge_faces.items[i] as usize,
-                p.edge_face_local[i] as usize,
-            );
-            let n = p.face_verts.range(f).len();
-            let l1 = (l + 1) % n;
-            put(c, child_face(p, f, l1), if n == 4 { l } else { 3 });
-            put(c, child_face(p, f, l), if n == 4 { l1 } else { 1 });
-        }
-    }
+    (c.vert_faces, c.vert_face_local) =
+        relation(nv + nf + p.edge_count(), length, |i, faces, local| {
+            if i < nv {
+                for (slot, k) in p.vert_faces.range(i).enumerate() {
+                    let (f, l) = (
+                        p.vert_faces.items[k] as usize,
+                        p.vert_face_local[k] as usize,
+                    );
+                    let quad = p.face_verts.range(f).len() == 4;
+                    faces[slot] = child_face(p, f, l);
+                    local[slot] = to_u32(if quad { l } else { 0 });
+                }
+            } else if i < nv + nf {
+                let f = i - nv;
+                let n = faces.len();
+                for j in 0..n {
+                    faces[j] = child_face(p, f, j);
+                    local[j] = to_u32(if n == 4 { (j + 2) % 4 } else { 2 });
+                }
+            } else {
+                // Per parent face of the edge: the quad after the edge, then the one before it.
+                for (slot, k) in p.edge_faces.range(i - nv - nf).enumerate() {
+                    let (f, l) = (
+                        p.edge_faces.items[k] as usize,
+                        p.edge_face_local[k] as usize,
+                    );
+                    let n = p.face_verts.range(f).len();
+                    let l1 = (l + 1) % n;
+                    faces[2 * slot] = child_face(p, f, l1);
+                    local[2 * slot] = to_u32(if n == 4 { l } else { 3 });
+                    faces[2 * slot + 1] = child_face(p, f, l);
+                    local[2 * slot + 1] = to_u32(if n == 4 { l1 } else { 1 });
+                }
+            }
+        });
 }
 
 fn child_vertex_edges(p: &Level, layout: ChildLayout, c: &mut Level) {
-    let (nv, nf, ne) = (p.vertex_count, p.face_count(), p.edge_count());
+    let (nv, nf) = (p.vertex_count, p.face_count());
+    debug_assert_eq!((layout.faces, layout.edges), (nv, nv + nf));
     let corners = p.face_verts.items.len();
     let half = |e: usize, k: usize| to_u32(corners + 2 * e + k);
-    let counts = (0..nv)
-        .map(|v| to_u32(p.vert_edges.range(v).len()))
-        .chain((0..nf).map(|f| to_u32(p.face_verts.range(f).len())))
-        .chain((0..ne).map(|e| to_u32(2 + p.edge_faces.range(e).len())));
-    c.vert_edges = Csr::with_counts(counts);
-    let mut slot = 0usize;
-    for v in 0..nv {
-        for &e in p.vert_edges.row(v) {
-            let k = usize::from(p.edge_verts[e as usize][0] != to_u32(v));
-            c.vert_edges.items[slot] = half(e as usize, k);
-            slot += 1;
-        }
-    }
-    debug_assert_eq!(layout.edges, nv + nf);
-    for f in 0..nf {
-        let r = p.face_verts.range(f);
-        let n = r.len();
-        for j in 0..n {
-            c.vert_edges.items[slot] = to_u32(r.start + (j + n - 1) % n);
-            slot += 1;
-        }
-    }
-    for e in 0..ne {
-        // Order as (edge half, face edge, edge half, face edges...), the first half being the
-        // one the first incident face reaches first (OpenSubdiv's counter-clockwise order).
-        let faces = p.edge_faces.range(e);
-        let face_edge = |idx: usize| {
-            let (f, l) = (
-                p.edge_faces.items[idx] as usize,
-                p.edge_face_local[idx] as usize,
-            );
-            let corner = p.face_verts.offsets[f] as usize + l;
-            (to_u32(corner), p.face_verts.items[corner])
-        };
-        let out = &mut c.vert_edges.items[slot..slot + 2 + faces.len()];
-        if faces.is_empty() {
-            out.copy_from_slice(&[half(e, 0), half(e, 1)]);
+    let length = |i: usize| {
+        if i < nv {
+            p.vert_edges.range(i).len()
+        } else if i < nv + nf {
+            p.face_verts.range(i - nv).len()
         } else {
+            2 + p.edge_faces.range(i - nv - nf).len()
+        }
+    };
+    let (edges, _) = relation(nv + nf + p.edge_count(), length, |i, out, _: &mut [()]| {
+        if i < nv {
+            for (slot, &e) in out.iter_mut().zip(p.vert_edges.row(i)) {
+                *slot = half(
+                    e as usize,
+                    usize::from(p.edge_verts[e as usize][0] != to_u32(i)),
+                );
+            }
+        } else if i < nv + nf {
+            let r = p.face_verts.range(i - nv);
+            let n = r.len();
+            for (j, slot) in out.iter_mut().enumerate() {
+                *slot = to_u32(r.start + (j + n - 1) % n);
+            }
+        } else {
+            // (edge half, face edge, edge half, face edges...), the first half being the one
+            // the first incident face reaches first (OpenSubdiv's counter-clockwise order).
+            let e = i - nv - nf;
+            let faces = p.edge_faces.range(e);
+            let face_edge = |idx: usize| {
+                let (f, l) = (
+                    p.edge_faces.items[idx] as usize,
+                    p.edge_face_local[idx] as usize,
+                );
+                let corner = p.face_verts.offsets[f] as usize + l;
+                (to_u32(corner), p.face_verts.items[corner])
+            };
+            if faces.is_empty() {
+                out.copy_from_slice(&[half(e, 0), half(e, 1)]);
+                return;
+            }
             let (first, corner) = face_edge(faces.start);
             let forward = corner == p.edge_verts[e][0];
             let (a, b) = if forward {
@@ -448,8 +487,8 @@ fn child_vertex_edges(p: &Level, layout: ChildLayout, c: &mut Level) {
                 out[3 + k] = face_edge(idx).0;
             }
         }
-        slot += out.len();
-    }
+    });
+    c.vert_edges = edges;
 }
 
 /// Sharpness, non-manifold flags, holes and rules of the child level.

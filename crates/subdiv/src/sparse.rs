@@ -105,36 +105,14 @@ impl SparseRows {
     /// `fill(row, cols, weights)` must write every slot of its row.
     pub fn from_lengths(
         rows: usize,
-        length: impl Fn(usize) -> usize,
+        length: impl Fn(usize) -> usize + Sync,
         fill: impl Fn(usize, &mut [u32], &mut [f64]) + Sync,
     ) -> Self {
-        let mut offsets = Vec::with_capacity(rows + 1);
-        let mut total = 0usize;
-        offsets.push(0);
-        for r in 0..rows {
-            total += length(r);
-            offsets.push(crate::mesh::to_u32(total));
-        }
+        let offsets = offsets_from_lengths(rows, length);
+        let total = *offsets.last().expect("offsets start at 0") as usize;
         let mut cols = vec![0u32; total];
         let mut weights = vec![0.0f64; total];
-        // Cut the flat arrays at chunk boundaries so each task owns its rows' slices.
-        let mut tasks = Vec::with_capacity(rows.div_ceil(CHUNK));
-        let (mut c_rest, mut w_rest) = (cols.as_mut_slice(), weights.as_mut_slice());
-        for start in (0..rows).step_by(CHUNK) {
-            let end = (start + CHUNK).min(rows);
-            let len = (offsets[end] - offsets[start]) as usize;
-            let (c, cr) = c_rest.split_at_mut(len);
-            let (w, wr) = w_rest.split_at_mut(len);
-            (c_rest, w_rest) = (cr, wr);
-            tasks.push((start, end, c, w));
-        }
-        tasks.into_par_iter().for_each(|(start, end, c, w)| {
-            let base = offsets[start] as usize;
-            for r in start..end {
-                let range = offsets[r] as usize - base..offsets[r + 1] as usize - base;
-                fill(r, &mut c[range.clone()], &mut w[range]);
-            }
-        });
+        fill_rows(&offsets, &mut cols, &mut weights, fill);
         Self {
             offsets,
             cols,
@@ -208,4 +186,56 @@ impl SparseRows {
     pub fn bytes(&self) -> usize {
         self.offsets.len() * 4 + self.cols.len() * 4 + self.weights.len() * 8
     }
+}
+
+/// CSR offsets (a leading zero, then running totals) of `rows` rows of the given lengths.
+pub(crate) fn offsets_from_lengths(
+    rows: usize,
+    length: impl Fn(usize) -> usize + Sync,
+) -> Vec<u32> {
+    let mut offsets: Vec<u32> = (0..=rows)
+        .into_par_iter()
+        .map(|r| {
+            if r == 0 {
+                0
+            } else {
+                crate::mesh::to_u32(length(r - 1))
+            }
+        })
+        .collect();
+    let mut total = 0u32;
+    for o in &mut offsets {
+        total += *o;
+        *o = total;
+    }
+    offsets
+}
+
+/// Fills two arrays laid out by CSR `offsets` row by row, in parallel: `fill(row, a, b)` gets
+/// that row's slices of both. Rows are cut into fixed chunks, so the work split, and therefore
+/// the result, does not depend on the thread count.
+pub(crate) fn fill_rows<A: Send, B: Send>(
+    offsets: &[u32],
+    a: &mut [A],
+    b: &mut [B],
+    fill: impl Fn(usize, &mut [A], &mut [B]) + Sync,
+) {
+    let rows = offsets.len() - 1;
+    let mut tasks = Vec::with_capacity(rows.div_ceil(CHUNK));
+    let (mut a_rest, mut b_rest) = (a, b);
+    for start in (0..rows).step_by(CHUNK) {
+        let end = (start + CHUNK).min(rows);
+        let len = (offsets[end] - offsets[start]) as usize;
+        let (x, xr) = a_rest.split_at_mut(len);
+        let (y, yr) = b_rest.split_at_mut(len);
+        (a_rest, b_rest) = (xr, yr);
+        tasks.push((start, end, x, y));
+    }
+    tasks.into_par_iter().for_each(|(start, end, x, y)| {
+        let base = offsets[start] as usize;
+        for r in start..end {
+            let range = offsets[r] as usize - base..offsets[r + 1] as usize - base;
+            fill(r, &mut x[range.clone()], &mut y[range]);
+        }
+    });
 }

@@ -17,6 +17,8 @@
 //! on an interior non-manifold crease, and topological corners with edge-and-corner boundaries.
 //! Child levels are built by [`crate::refine`].
 
+use rayon::prelude::*;
+
 use crate::mesh::{Mesh, to_u32};
 use crate::options::BoundaryInterpolation;
 use crate::rules::crease::{self, INFINITE, Rule};
@@ -409,6 +411,7 @@ impl Level {
     /// Recomputes every vertex's rule from the current sharpness values.
     pub(crate) fn assign_rules(&mut self) {
         self.vertex_rule = (0..self.vertex_count)
+            .into_par_iter()
             .map(|v| {
                 let sharp = self
                     .vert_edges
