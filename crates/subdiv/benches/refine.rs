@@ -1,16 +1,27 @@
 //! Subdivision benchmarks on square grids of 10k and 100k quads at levels 1 to 3:
 //! topology refinement (all levels' tables and weights), full refinement (topology plus
 //! positions), stencil table construction, and applying a stencil table to new positions
-//! (the per-frame cost of a cloth simulation).
+//! (the per-frame cost of a cloth simulation). Throughput is in refined faces per second; the
+//! allocation profiler's "max alloc" row is the peak memory a run holds.
 //!
 //! `cargo bench -p tailor-subdiv --bench refine` (set `RAYON_NUM_THREADS=1` for one thread).
 //! The 100k-quad level-3 cases need several GB and are skipped unless `TAILOR_BENCH_LARGE` is set.
 
-use divan::{Bencher, black_box};
+use divan::counter::ItemsCount;
+use divan::{AllocProfiler, Bencher, black_box};
 use tailor_subdiv::{Mesh, Point, Refiner};
+
+/// Reports allocations per benchmark, including the peak ("max alloc") held at once.
+#[global_allocator]
+static ALLOC: AllocProfiler = AllocProfiler::system();
 
 fn main() {
     divan::main();
+}
+
+/// Refined faces, for a faces/second throughput column.
+fn refined_faces(side: usize, level: usize) -> ItemsCount {
+    ItemsCount::new(side * side * 4usize.pow(level as u32))
 }
 
 fn grid(n: usize) -> Mesh {
@@ -40,13 +51,15 @@ fn cases() -> Vec<(usize, usize)> {
 #[divan::bench(args = cases(), sample_count = 5)]
 fn topology(bencher: Bencher, &(side, level): &(usize, usize)) {
     let mesh = grid(side);
-    bencher.bench(|| black_box(Refiner::new(&mesh, level)));
+    bencher
+        .counter(refined_faces(side, level))
+        .bench(|| black_box(Refiner::new(&mesh, level)));
 }
 
 #[divan::bench(args = cases(), sample_count = 5)]
 fn topology_and_positions(bencher: Bencher, &(side, level): &(usize, usize)) {
     let mesh = grid(side);
-    bencher.bench(|| {
+    bencher.counter(refined_faces(side, level)).bench(|| {
         let refiner = Refiner::new(&mesh, level);
         black_box(refiner.refine(mesh.positions()))
     });
