@@ -1,19 +1,34 @@
-//! Milliseconds per frame (24 fps, 5 substeps) of a 2 m square sheet pinned at two corners,
-//! falling from horizontal; no collisions yet. Run:
-//! `cargo bench -p tailor-cloth --bench step`.
+//! Milliseconds per frame (24 fps, 5 substeps) of issue 4's drape: a 2 m square sheet of n²
+//! vertices falling 0.5 m onto a sphere of radius 0.5 m, with self-collision off and on, and of
+//! a curtain pinned at two corners with no obstacle. The measured frames are mid-drape, with
+//! the sheet in contact. Run: `cargo bench -p tailor-cloth --bench step`.
 
-use tailor_cloth::shapes::sheet;
+use nalgebra::Vector3;
+use tailor_cloth::shapes::{sheet, sphere};
 use tailor_cloth::{Material, Model, Motion, Settings, Simulator, State};
+use tailor_subdiv::Point;
 
 fn main() {
     divan::main();
 }
 
-/// The sheet settled for `warm` frames, so the measured frames are mid-drape.
-fn curtain(n: u32, warm: u32) -> (Simulator, State) {
-    let model = Model::new(&sheet(n, n, 2.0, 2.0), &Material::COTTON).expect("valid sheet");
-    let mut sim = Simulator::new(model, Settings::default()).expect("valid settings");
-    sim.pin(&[0, n - 1], Motion::Fixed).expect("corners exist");
+/// The simulator after `warm` frames of `n`² sheet, set up by `setup`.
+fn settled(
+    n: u32,
+    warm: u32,
+    settings: Settings,
+    setup: impl FnOnce(&mut Simulator),
+) -> (Simulator, State) {
+    let mut garment = sheet(n, n, 2.0, 2.0);
+    let centred: Vec<Point> = garment
+        .positions()
+        .iter()
+        .map(|p| p - Vector3::new(1.0, 0.0, 1.0))
+        .collect();
+    garment.set_positions(&centred).expect("same count");
+    let model = Model::new(&garment, &Material::COTTON).expect("valid sheet");
+    let mut sim = Simulator::new(model, settings).expect("valid settings");
+    setup(&mut sim);
     let mut state = State::at_rest(sim.model());
     for _ in 0..warm {
         sim.step(&mut state, 1.0 / 24.0).expect("stable");
@@ -21,8 +36,35 @@ fn curtain(n: u32, warm: u32) -> (Simulator, State) {
     (sim, state)
 }
 
+fn drape(n: u32, self_collision: bool) -> (Simulator, State) {
+    let settings = Settings {
+        self_collision,
+        ..Settings::default()
+    };
+    // Contact begins at frame 8; measure from frame 16 on.
+    settled(n, 16, settings, |sim| {
+        let ball = sphere(Point::new(0.0, -1.0, 0.0), 0.5, 24, 48);
+        sim.set_obstacle(ball.positions(), ball.face_offsets(), ball.face_vertices())
+            .expect("valid sphere");
+    })
+}
+
 #[divan::bench(args = [32, 64, 128], sample_count = 5, sample_size = 1)]
-fn frame(bencher: divan::Bencher, n: u32) {
-    let (mut sim, mut state) = curtain(n, 3);
+fn sphere_drape(bencher: divan::Bencher, n: u32) {
+    let (mut sim, mut state) = drape(n, false);
+    bencher.bench_local(|| sim.step(&mut state, 1.0 / 24.0).expect("stable"));
+}
+
+#[divan::bench(args = [32, 64, 128], sample_count = 5, sample_size = 1)]
+fn sphere_drape_self_collision(bencher: divan::Bencher, n: u32) {
+    let (mut sim, mut state) = drape(n, true);
+    bencher.bench_local(|| sim.step(&mut state, 1.0 / 24.0).expect("stable"));
+}
+
+#[divan::bench(args = [32, 64, 128], sample_count = 5, sample_size = 1)]
+fn curtain(bencher: divan::Bencher, n: u32) {
+    let (mut sim, mut state) = settled(n, 3, Settings::default(), |sim| {
+        sim.pin(&[0, n - 1], Motion::Fixed).expect("corners exist");
+    });
     bencher.bench_local(|| sim.step(&mut state, 1.0 / 24.0).expect("stable"));
 }

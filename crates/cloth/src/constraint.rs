@@ -13,9 +13,9 @@
 //! - **Attachments** bind a vertex to a point the caller moves, e.g. a point given by
 //!   barycentric coordinates on the animated body's triangle: the caller supplies its position
 //!   and velocity at a time, and the goal follows that line.
-//! - **Contacts** are the seam for collision response: a vertex held against a plane with unit
-//!   normal n moving with a velocity, its normal velocity prescribed and tangential velocity
-//!   free. A collision pass sets them before each step.
+//! - **Contacts** hold a vertex against a plane with unit normal n moving with a velocity, its
+//!   normal velocity prescribed and tangential velocity free: those the caller sets, plus those
+//!   the collision pass ([`crate::collision`]) finds before each substep.
 //!
 //! When one vertex has several, pins win over attachments, attachments over contacts.
 
@@ -228,19 +228,21 @@ impl Constraints {
         Ok(())
     }
 
-    /// Fills `filter` for a substep of length `h` ending at time `t`, from positions `start`.
+    /// Fills `filter` for a substep of length `h` ending at time `t`, from positions `start`,
+    /// with the substep's `collisions` after the caller's contacts.
     pub(crate) fn prepare(
         &mut self,
         rest: &[Point],
         start: &[Point],
         t: f64,
         h: f64,
+        collisions: &[Contact],
         filter: &mut Filter,
     ) {
         filter.s.fill(Mat3::identity());
         filter.z.fill(Vec3::zeros());
         filter.placed.fill(false);
-        for c in &self.contacts {
+        for c in self.contacts.iter().chain(collisions) {
             let i = c.vertex as usize;
             filter.s[i] = Mat3::identity() - c.normal * c.normal.transpose();
             filter.z[i] = c.velocity;
@@ -331,7 +333,7 @@ mod tests {
         c.pin(&[2], Motion::Fixed).unwrap();
         assert!(c.pin(&[3], Motion::Fixed).is_err());
         let mut f = Filter::new(3);
-        c.prepare(&rest, &rest, 1.0, 0.5, &mut f);
+        c.prepare(&rest, &rest, 1.0, 0.5, &[], &mut f);
         assert_eq!(f.s[0], Mat3::identity() - up * up.transpose());
         assert_eq!(f.z[0], up);
         assert_eq!(f.goal[1], Point::new(2.0, 0.0, 0.0));

@@ -65,6 +65,10 @@ pub enum ClothError {
         /// The value.
         value: f64,
     },
+    /// The obstacle or the garment could not be turned into a collision hierarchy, or the
+    /// obstacle's positions do not fit its faces.
+    #[error("collision: {0}")]
+    Collide(#[from] tailor_collide::CollideError),
     /// A step failed even at the smallest allowed substep.
     #[error("the step at t = {time} s failed with a substep of {step} s: {reason}")]
     StepFailed {

@@ -13,11 +13,20 @@
 //! Layers, as in the rest of tailor: [`energy`] holds the pure element rules (energies,
 //! gradients, PSD-projected Hessians); [`model`] and [`threads`] the tables built once from the
 //! topology; the assembly, [`matrix`], [`pcg`] and [`simulator`] the per-step evaluation.
-//! Collisions plug in later through [`Simulator::set_contacts`], the per-vertex plane
-//! constraints the solver already honours.
+//!
+//! Collisions go through `tailor-collide` (Bridson, Fedkiw & Anderson 2002; the private
+//! `collision` module documents each pass). The obstacle is a polygon mesh of fixed topology:
+//! [`Simulator::set_obstacle`] once with its rest positions and CSR faces (the positions guide
+//! the hierarchy, which is built once; this is the one difference from the pipeline's sketch,
+//! which had no positions), then [`Simulator::set_obstacle_motion`] per frame with its
+//! positions at the frame's start and end; substeps interpolate linearly. [`Settings`] holds
+//! the `thickness` (m), Coulomb `friction` and `self_collision`. Contacts become filter
+//! constraints of the implicit solve; continuous collision and a final projection are the
+//! fail-safes, so no vertex tunnels through the body or ends closer than half the thickness.
 #![warn(missing_docs)]
 
 mod assemble;
+mod collision;
 pub mod constraint;
 pub mod energy;
 mod error;

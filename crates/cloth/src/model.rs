@@ -77,6 +77,9 @@ pub struct Model {
     pub(crate) springs: Springs,
     pub(crate) quads: Quads,
     pub(crate) triples: Triples,
+    /// The control mesh's faces as CSR (offsets, corners), for the collision hierarchy.
+    pub(crate) face_offsets: Vec<u32>,
+    pub(crate) face_vertices: Vec<u32>,
     multipliers: [Vec<f64>; 3],
 }
 
@@ -163,6 +166,8 @@ impl Model {
             springs,
             quads,
             triples,
+            face_offsets: mesh.face_offsets().to_vec(),
+            face_vertices: mesh.face_vertices().to_vec(),
             multipliers: [vec![1.0; n], vec![1.0; n], vec![1.0; n]],
         };
         model.update_stiffness();

@@ -27,6 +27,7 @@
 use tailor_subdiv::Point;
 
 use crate::assemble::{Assembly, Coefficients, Environment, Totals};
+use crate::collision::{Collisions, Obstacle};
 use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
 use crate::energy::Vec3;
 use crate::pcg::Pcg;
@@ -54,6 +55,13 @@ pub struct Settings {
     pub wind: Vec3,
     /// Project element Hessians to PSD (turn off only to study the raw Jacobians).
     pub project_hessians: bool,
+    /// Collision thickness, m: contacts hold the cloth this far from the obstacle, no vertex
+    /// ends closer than half of it, and cloth layers repel within it.
+    pub thickness: f64,
+    /// Coulomb friction coefficient μ between cloth and obstacle.
+    pub friction: f64,
+    /// Whether the cloth collides with itself.
+    pub self_collision: bool,
 }
 
 impl Default for Settings {
@@ -68,6 +76,9 @@ impl Default for Settings {
             gravity: Vec3::new(0.0, -9.81, 0.0),
             wind: Vec3::zeros(),
             project_hessians: true,
+            thickness: 0.005,
+            friction: 0.3,
+            self_collision: false,
         }
     }
 }
@@ -110,6 +121,10 @@ pub struct StepReport {
     pub max_strain: f64,
     /// Kinetic + elastic + gravitational energy at the end of the step, J.
     pub energy: f64,
+    /// Obstacle contact constraints in the last substep.
+    pub contacts: u32,
+    /// Impacts and projections the collision fail-safes made over all substeps.
+    pub impacts: u32,
 }
 
 /// Buffers of one substep.
@@ -134,6 +149,7 @@ pub struct Simulator {
     constraints: Constraints,
     assembly: Assembly,
     pcg: Pcg,
+    collisions: Collisions,
     work: Work,
 }
 
@@ -144,11 +160,12 @@ struct Evaluated {
 }
 
 impl Simulator {
-    /// A simulator with no constraints.
+    /// A simulator with no constraints and no obstacle.
     ///
     /// # Errors
-    /// [`ClothError::BadValue`] for a non-positive substep or tolerance, or non-finite gravity
-    /// or wind.
+    /// [`ClothError::BadValue`] for a non-positive substep, tolerance or thickness, negative
+    /// friction, or non-finite gravity or wind; [`ClothError::Collide`] if the garment's faces
+    /// cannot make a collision hierarchy.
     pub fn new(model: Model, settings: Settings) -> Result<Self, ClothError> {
         let checks = [
             (
@@ -161,6 +178,8 @@ impl Simulator {
                 settings.cg_tolerance,
                 settings.cg_tolerance > 0.0,
             ),
+            ("thickness", settings.thickness, settings.thickness > 0.0),
+            ("friction", settings.friction, settings.friction >= 0.0),
             ("gravity", settings.gravity.norm(), true),
             ("wind", settings.wind.norm(), true),
         ];
@@ -171,6 +190,7 @@ impl Simulator {
         }
         let n = model.vertex_count();
         Ok(Self {
+            collisions: Collisions::new(&model)?,
             constraints: Constraints::new(n),
             assembly: Assembly::new(&model),
             pcg: Pcg::new(n),
@@ -235,6 +255,48 @@ impl Simulator {
     /// See [`Constraints::set_contacts`].
     pub fn set_contacts(&mut self, contacts: &[Contact]) -> Result<(), ClothError> {
         self.constraints.set_contacts(contacts)
+    }
+
+    /// Makes the polygon mesh with CSR faces `face_offsets`/`face_vertices` the obstacle,
+    /// resting at `positions` (which also guide its hierarchy, built once here) until
+    /// [`Self::set_obstacle_motion`] moves it. Its faces must wind counter-clockwise seen from
+    /// outside: the cloth is kept on that side. Replaces any earlier obstacle.
+    ///
+    /// # Errors
+    /// [`ClothError::Collide`] for faces the hierarchy cannot take (see
+    /// [`tailor_collide::Hierarchy::build`]).
+    pub fn set_obstacle(
+        &mut self,
+        positions: &[Point],
+        face_offsets: &[u32],
+        face_vertices: &[u32],
+    ) -> Result<(), ClothError> {
+        self.collisions.obstacle = Some(Obstacle::new(positions, face_offsets, face_vertices)?);
+        Ok(())
+    }
+
+    /// Moves the obstacle for the next frame: at `start` at time `t0`, at `end` at time `t1`
+    /// (seconds), linearly in between, so each body vertex has the velocity
+    /// (end − start)/(t1 − t0); before `t0` and after `t1` it holds still.
+    ///
+    /// # Errors
+    /// [`ClothError::BadValue`] without an obstacle (value NaN), for `t1 <= t0` or a
+    /// non-finite position; [`ClothError::WrongLength`] for a position count that does not
+    /// match the obstacle.
+    pub fn set_obstacle_motion(
+        &mut self,
+        t0: f64,
+        start: &[Point],
+        t1: f64,
+        end: &[Point],
+    ) -> Result<(), ClothError> {
+        match &mut self.collisions.obstacle {
+            Some(obstacle) => obstacle.set_motion(t0, start, t1, end),
+            None => Err(ClothError::BadValue {
+                what: "obstacle motion without an obstacle",
+                value: f64::NAN,
+            }),
+        }
     }
 
     fn environment(&self) -> Environment {
@@ -362,8 +424,17 @@ impl Simulator {
         let w = &mut self.work;
         w.x0.copy_from_slice(&state.positions);
         w.v0.copy_from_slice(&state.velocities);
-        self.constraints
-            .prepare(&self.model.rest, &w.x0, t1, h, &mut w.filter);
+        self.collisions
+            .before_solve(&self.settings, state.time, h, &w.x0, &w.v0)
+            .map_err(|_| StepFailure::NonFinite)?;
+        self.constraints.prepare(
+            &self.model.rest,
+            &w.x0,
+            t1,
+            h,
+            &self.collisions.contacts,
+            &mut w.filter,
+        );
         for (i, v) in w.trial.iter_mut().enumerate() {
             *v = w.filter.z[i] - w.filter.s[i] * w.filter.z[i];
         }
@@ -419,6 +490,19 @@ impl Simulator {
         if !finite {
             return Err(StepFailure::NonFinite);
         }
+        let impacts = self
+            .collisions
+            .after_solve(
+                &self.settings,
+                &self.model.mass,
+                &w.filter.placed,
+                h,
+                &w.x0,
+                &mut w.x,
+                &mut w.trial,
+                &w.rhs,
+            )
+            .map_err(|_| StepFailure::NonFinite)?;
         state.positions.copy_from_slice(&w.x);
         state.velocities.copy_from_slice(&w.trial);
         state.time = t1;
@@ -427,14 +511,16 @@ impl Simulator {
             0.5 * mass[i] * w.trial[i].norm_squared()
         });
         report.substeps += 1;
-        report.max_strain = at.totals.max_strain;
+        report.max_strain = self.model.max_strain(&state.positions);
         report.energy = kinetic + at.totals.potential;
+        report.contacts = self.collisions.contacts.len() as u32;
+        report.impacts += impacts;
         Ok(())
     }
 
     /// Advances `state` by `dt` seconds with symplectic (semi-implicit) Euler,
     /// v₁ = v₀ + h M⁻¹ f(x₀, v₀), x₁ = x₀ + h v₁: explicit, so only stable for small substeps;
-    /// kept to test energy behaviour. Constraints apply as in [`Self::step`].
+    /// kept to test energy behaviour. Constraints apply as in [`Self::step`]; collisions do not.
     ///
     /// # Errors
     /// As [`Self::step`], without retries.
@@ -455,8 +541,14 @@ impl Simulator {
         for _ in 0..count {
             let t1 = state.time + h;
             let w = &mut self.work;
-            self.constraints
-                .prepare(&self.model.rest, &state.positions, t1, h, &mut w.filter);
+            self.constraints.prepare(
+                &self.model.rest,
+                &state.positions,
+                t1,
+                h,
+                &[],
+                &mut w.filter,
+            );
             let x = &state.positions;
             self.assembly.evaluate(
                 &self.model,

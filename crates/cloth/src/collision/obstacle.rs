@@ -1,0 +1,295 @@
+//! The obstacle: a polygon mesh of fixed topology (the body) whose positions the caller gives at
+//! the start and end of each frame; substeps interpolate linearly between them, so every body
+//! vertex moves with the constant velocity (end − start) / (t₁ − t₀) (see [`crate::collision`]
+//! for where each pass sits in the step).
+//!
+//! Contacts and the final projection use the closest body point of each cloth vertex
+//! ([`Hierarchy::closest_points`]); the direction away from the body is from that point to the
+//! vertex when the vertex is in front of the face, the face's outward normal when it is behind
+//! (inside the body). The continuous pass refits both hierarchies over the substep's motion
+//! ([`Hierarchy::refit_swept`]) and asks for vertex–triangle impacts
+//! ([`Hierarchy::impacts_with`]), so a vertex cannot cross a body face between two substeps
+//! however fast either moves (Bridson, Fedkiw & Anderson 2002, §6).
+
+use tailor_collide::{Closest, CollideError, Hierarchy};
+use tailor_subdiv::Point;
+
+use super::Motion;
+use crate::constraint::Contact;
+use crate::energy::Vec3;
+use crate::{ClothError, Settings};
+
+/// Rounds of the continuous pass: each re-tests the paths the last one changed.
+const IMPACT_ROUNDS: usize = 4;
+
+/// How far past half the thickness the projection puts a vertex, relative to it, so that the
+/// distance measured afterwards is not below half the thickness by rounding.
+const PROJECTION_SLACK: f64 = 1e-6;
+
+/// A moving polygon mesh the garment collides with.
+#[derive(Clone, Debug)]
+pub(crate) struct Obstacle {
+    hierarchy: Hierarchy,
+    /// Times of the frame's start and end positions.
+    times: [f64; 2],
+    frame: [Vec<Point>; 2],
+    /// Positions at the current substep's start and end.
+    substep: [Vec<Point>; 2],
+    /// Velocity of each body vertex over the current substep.
+    velocity: Vec<Vec3>,
+}
+
+impl Obstacle {
+    /// Builds the obstacle's hierarchy once, resting at `positions`.
+    pub fn new(
+        positions: &[Point],
+        face_offsets: &[u32],
+        face_vertices: &[u32],
+    ) -> Result<Self, ClothError> {
+        let hierarchy = Hierarchy::build(positions, face_offsets, face_vertices)?;
+        let n = positions.len();
+        Ok(Self {
+            hierarchy,
+            times: [0.0, 0.0],
+            frame: [positions.to_vec(), positions.to_vec()],
+            substep: [positions.to_vec(), positions.to_vec()],
+            velocity: vec![Vec3::zeros(); n],
+        })
+    }
+
+    /// The body at `start` at time `t0` and at `end` at time `t1`.
+    pub fn set_motion(
+        &mut self,
+        t0: f64,
+        start: &[Point],
+        t1: f64,
+        end: &[Point],
+    ) -> Result<(), ClothError> {
+        let expected = self.hierarchy.vertex_count();
+        for (what, p) in [("obstacle start", start), ("obstacle end", end)] {
+            if p.len() != expected {
+                return Err(ClothError::WrongLength {
+                    what,
+                    given: p.len(),
+                    expected,
+                });
+            }
+            if let Some(bad) = p.iter().find(|q| !q.iter().all(|c| c.is_finite())) {
+                return Err(ClothError::BadValue {
+                    what: "obstacle position",
+                    value: bad.coords.norm(),
+                });
+            }
+        }
+        if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
+            return Err(ClothError::BadValue {
+                what: "obstacle frame end time (must follow the start time)",
+                value: t1,
+            });
+        }
+        self.times = [t0, t1];
+        self.frame[0].copy_from_slice(start);
+        self.frame[1].copy_from_slice(end);
+        Ok(())
+    }
+
+    /// Interpolates the body at the start and end of the substep `[t0, t0 + h]`; before and
+    /// after the frame it holds still.
+    pub fn begin_substep(&mut self, t0: f64, h: f64) {
+        let [ta, tb] = self.times;
+        let fraction = |t: f64| {
+            if tb > ta {
+                ((t - ta) / (tb - ta)).clamp(0.0, 1.0)
+            } else {
+                1.0
+            }
+        };
+        let [start, end] = &self.frame;
+        for (out, t) in self.substep.iter_mut().zip([t0, t0 + h]) {
+            let s = fraction(t);
+            for ((o, a), b) in out.iter_mut().zip(start).zip(end) {
+                *o = a + (b - a) * s;
+            }
+        }
+        let [a, b] = &self.substep;
+        for ((v, a), b) in self.velocity.iter_mut().zip(a).zip(b) {
+            *v = (b - a) / h;
+        }
+    }
+
+    /// The body's velocity at a closest point.
+    fn velocity_at(&self, c: &Closest) -> Vec3 {
+        (0..3)
+            .map(|k| self.velocity[c.vertices[k] as usize] * c.barycentric[k])
+            .sum()
+    }
+
+    /// Contact constraints for the substep (step 1 of [`crate::collision`]): every vertex not
+    /// `pulling` that would end closer than the thickness if it kept its velocity plus
+    /// gravity's pull. Looks as far as the fastest cloth vertex and body vertex can close in
+    /// one substep.
+    pub fn find_contacts(
+        &mut self,
+        settings: &Settings,
+        h: f64,
+        x0: &[Point],
+        v0: &[Vec3],
+        pulling: &[bool],
+        out: &mut Vec<Contact>,
+    ) -> Result<(), CollideError> {
+        let thickness = settings.thickness;
+        let fastest = |v: &[Vec3]| v.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let reach = h * (fastest(v0) + h * settings.gravity.norm() + fastest(&self.velocity));
+        self.hierarchy.refit(&self.substep[0], 0.0)?;
+        let closest = self.hierarchy.closest_points(x0, thickness + reach)?;
+        for (i, c) in closest.iter().enumerate() {
+            let Some(c) = c else { continue };
+            if pulling[i] {
+                continue;
+            }
+            let (normal, distance) = away_from(x0[i], c);
+            let body = self.velocity_at(c);
+            let closing = (v0[i] + settings.gravity * h - body).dot(&normal);
+            if distance + h * closing < thickness {
+                let approach = (distance - thickness).max(0.0) / h;
+                out.push(Contact {
+                    vertex: i as u32,
+                    normal,
+                    velocity: body - normal * approach,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Puts back on the front of a body face every vertex whose path over the substep enters
+    /// that face from the front (step 5 of [`crate::collision`]), at the thickness, with no
+    /// velocity into the face. Returns how many vertices it moved.
+    pub fn resolve_impacts(
+        &mut self,
+        cloth: &mut Hierarchy,
+        thickness: f64,
+        m: &mut Motion,
+    ) -> Result<u32, CollideError> {
+        let [start, end] = &self.substep;
+        self.hierarchy.refit_swept(start, end, 0.0)?;
+        let triangles = self.hierarchy.triangles();
+        let mut moved = 0;
+        for _ in 0..IMPACT_ROUNDS {
+            cloth.refit_swept(m.x0, m.x, 0.0)?;
+            let impacts = cloth.impacts_with(&self.hierarchy).vertex_triangle;
+            let mut changed = false;
+            // Sorted by vertex: take each vertex's earliest impact.
+            for group in impacts.chunk_by(|a, b| a.vertex == b.vertex) {
+                let hit = group
+                    .iter()
+                    .min_by(|a, b| a.time.total_cmp(&b.time))
+                    .expect("chunks are not empty");
+                let i = hit.vertex as usize;
+                if m.inverse_mass[i] == 0.0 {
+                    continue;
+                }
+                let corners = triangles[hit.triangle as usize].map(|k| k as usize);
+                let point = |p: &[Point]| -> Point {
+                    let w = hit.barycentric;
+                    Point::from(
+                        p[corners[0]].coords * w[0]
+                            + p[corners[1]].coords * w[1]
+                            + p[corners[2]].coords * w[2],
+                    )
+                };
+                let normal_at = |t: f64| {
+                    let c = corners.map(|k| start[k] + (end[k] - start[k]) * t);
+                    (c[1] - c[0]).cross(&(c[2] - c[0])).normalize()
+                };
+                let relative = (m.x[i] - m.x0[i]) - (point(end) - point(start));
+                if relative.dot(&normal_at(hit.time)) >= 0.0 {
+                    continue; // leaving the body through this face
+                }
+                let normal = normal_at(1.0);
+                if !normal.iter().all(|c| c.is_finite()) {
+                    continue;
+                }
+                m.x[i] = point(end) + normal * thickness;
+                let body = (point(end) - point(start)) / m.h;
+                let closing = (m.v[i] - body).dot(&normal);
+                if closing < 0.0 {
+                    m.v[i] -= normal * closing;
+                }
+                changed = true;
+                moved += 1;
+            }
+            if !changed {
+                break;
+            }
+        }
+        Ok(moved)
+    }
+
+    /// Pushes every vertex closer to the body than half the thickness (or behind a face) out
+    /// to half the thickness, removing its velocity into the body. Returns how many it moved.
+    pub fn project(&mut self, thickness: f64, m: &mut Motion) -> Result<u32, CollideError> {
+        self.hierarchy.refit(&self.substep[1], 0.0)?;
+        let closest = self.hierarchy.closest_points(m.x, thickness)?;
+        let floor = 0.5 * thickness;
+        let mut moved = 0;
+        for (i, c) in closest.iter().enumerate() {
+            let Some(c) = c else { continue };
+            let (normal, distance) = away_from(m.x[i], c);
+            if distance >= floor || m.inverse_mass[i] == 0.0 {
+                continue;
+            }
+            m.x[i] = c.point + normal * (floor * (1.0 + PROJECTION_SLACK));
+            let closing = (m.v[i] - self.velocity_at(c)).dot(&normal);
+            if closing < 0.0 {
+                m.v[i] -= normal * closing;
+            }
+            moved += 1;
+        }
+        Ok(moved)
+    }
+}
+
+/// The unit direction away from the body at the closest point `c` to `q`, and the signed
+/// distance along it (negative behind the face, i.e. inside the body).
+fn away_from(q: Point, c: &Closest) -> (Vec3, f64) {
+    let offset = q - c.point;
+    if offset.dot(&c.normal) > 0.0 && c.distance > 0.0 {
+        (offset / c.distance, c.distance)
+    } else {
+        (c.normal, -c.distance)
+    }
+}
+
+/// Coulomb friction on the contact vertices (step 2 of [`crate::collision`]): the normal
+/// impulse jₙ = −residual · n the contact exerted may remove up to μ jₙ / m of the tangential
+/// velocity relative to the body. A contact that pulled (jₙ < 0) is marked in `pulling`.
+pub(super) fn friction(
+    contacts: &[Contact],
+    residual: &[Vec3],
+    mu: f64,
+    m: &mut Motion,
+    pulling: &mut [bool],
+) {
+    pulling.fill(false);
+    for c in contacts {
+        let i = c.vertex as usize;
+        let inverse = m.inverse_mass[i];
+        let push = -residual[i].dot(&c.normal);
+        if inverse == 0.0 {
+            continue;
+        }
+        if push < 0.0 {
+            pulling[i] = true;
+            continue;
+        }
+        let relative = m.v[i] - c.velocity;
+        let tangential = relative - c.normal * relative.dot(&c.normal);
+        let speed = tangential.norm();
+        if speed > 0.0 {
+            let change = -tangential * ((mu * push * inverse).min(speed) / speed);
+            m.v[i] += change;
+            m.x[i] += change * m.h;
+        }
+    }
+}

@@ -1,0 +1,204 @@
+//! The garment against itself: proximity repulsion, then continuous impacts with impact zones
+//! as the fail-safe (Bridson, Fedkiw & Anderson 2002, §7.1 and §7.4).
+//!
+//! Both act on velocities, the positions following as x = x₀ + h v, so the start of the
+//! substep, free of intersections, stays the reference. An impulse along a unit normal n acts
+//! on the four vertices of a vertex–triangle pair (weights 1, −w₀, −w₁, −w₂ with w the
+//! barycentric coordinates) or an edge–edge pair (1 − s, s, −(1 − u), −u), each moving by its
+//! weight over its mass, which changes the relative velocity of the two contact points by the
+//! impulse times Σ αₖ² / mₖ ([`Motion::push_apart`]). The normal-cone culling of the collide
+//! crate keeps both queries cheap where the cloth is smooth.
+
+use tailor_collide::{CollideError, Hierarchy, Impacts};
+
+use super::Motion;
+use crate::energy::Vec3;
+
+/// Rounds of impulses before impact zones take over.
+const IMPULSE_ROUNDS: usize = 6;
+
+/// Rounds of impact-zone merging before giving up (each merges at least two zones).
+const ZONE_ROUNDS: usize = 64;
+
+/// Fraction of the thickness two colliding points are set to separate by.
+const SEPARATION: f64 = 0.1;
+
+/// Repulsion: every vertex within `thickness` of a face (not its own) at the start of the
+/// substep stops approaching it and separates by a tenth of the overlap per substep.
+pub(super) fn repel(
+    cloth: &mut Hierarchy,
+    thickness: f64,
+    m: &mut Motion,
+) -> Result<(), CollideError> {
+    cloth.refit(m.x0, 0.0)?;
+    let near = cloth.self_proximity(thickness)?;
+    let triangles = cloth.triangles();
+    for p in 0..near.len() {
+        for c in near.of(p) {
+            let offset = m.x0[p] - c.point;
+            let normal = if c.distance > 0.0 {
+                offset / c.distance
+            } else {
+                c.normal
+            };
+            let [a, b, d] = triangles[c.triangle as usize];
+            let w = c.barycentric;
+            let target = SEPARATION * (thickness - c.distance) / m.h;
+            m.push_apart(
+                [p as u32, a, b, d],
+                [1.0, -w[0], -w[1], -w[2]],
+                normal,
+                target,
+            );
+        }
+    }
+    m.sync_positions();
+    Ok(())
+}
+
+/// One contact of the continuous query as four weighted vertices and a unit normal at the
+/// time of contact.
+struct Pair {
+    vertices: [u32; 4],
+    alpha: [f64; 4],
+    time: f64,
+    /// Vertex–triangle (else edge–edge).
+    triangle: bool,
+}
+
+impl Pair {
+    fn list(cloth: &Hierarchy, impacts: &Impacts) -> impl Iterator<Item = Self> {
+        let triangles = cloth.triangles();
+        let vt = impacts.vertex_triangle.iter().map(|i| {
+            let [a, b, c] = triangles[i.triangle as usize];
+            let w = i.barycentric;
+            Self {
+                vertices: [i.vertex, a, b, c],
+                alpha: [1.0, -w[0], -w[1], -w[2]],
+                time: i.time,
+                triangle: true,
+            }
+        });
+        let ee = impacts.edge_edge.iter().map(|i| {
+            let ([a, b], [c, d]) = (i.edges[0], i.edges[1]);
+            let [s, u] = i.parameters;
+            Self {
+                vertices: [a, b, c, d],
+                alpha: [1.0 - s, s, u - 1.0, -u],
+                time: i.time,
+                triangle: false,
+            }
+        });
+        vt.chain(ee)
+    }
+
+    /// Σ αₖ pₖ over positions `p`.
+    fn combine(&self, p: impl Fn(usize) -> Vec3) -> Vec3 {
+        self.vertices
+            .iter()
+            .zip(&self.alpha)
+            .map(|(&k, &a)| p(k as usize) * a)
+            .sum()
+    }
+
+    /// The contact normal at the time of impact, pointing the way the first feature was
+    /// relative to the second at the start; `None` when it is undefined.
+    fn normal(&self, m: &Motion) -> Option<Vec3> {
+        let at = |k: u32| {
+            let k = k as usize;
+            m.x0[k] + (m.x[k] - m.x0[k]) * self.time
+        };
+        let [a, b, c, d] = self.vertices.map(at);
+        let n = if self.triangle {
+            (c - b).cross(&(d - b))
+        } else {
+            (b - a).cross(&(d - c))
+        };
+        let start = self.combine(|k| m.x0[k].coords);
+        let n = if n.norm() > 0.0 { n } else { start };
+        let n = n.try_normalize(0.0)?;
+        Some(if start.dot(&n) < 0.0 { -n } else { n })
+    }
+}
+
+/// Continuous self-collision: impulses at the impacts for a few rounds, then impact zones.
+/// Returns how many impacts it handled.
+pub(super) fn resolve_impacts(
+    cloth: &mut Hierarchy,
+    thickness: f64,
+    m: &mut Motion,
+) -> Result<u32, CollideError> {
+    let mut handled = 0;
+    for _ in 0..IMPULSE_ROUNDS {
+        cloth.refit_swept(m.x0, m.x, 0.0)?;
+        let impacts = cloth.self_impacts();
+        if impacts.vertex_triangle.is_empty() && impacts.edge_edge.is_empty() {
+            return Ok(handled);
+        }
+        for pair in Pair::list(cloth, &impacts) {
+            let Some(normal) = pair.normal(m) else {
+                continue;
+            };
+            let gap = pair.combine(|k| m.x0[k].coords).dot(&normal);
+            let target = (SEPARATION * thickness - gap) / m.h;
+            m.push_apart(pair.vertices, pair.alpha, normal, target);
+            handled += 1;
+        }
+        m.sync_positions();
+    }
+    Ok(handled + impact_zones(cloth, m)?)
+}
+
+/// Merges the vertices of every remaining impact into zones that move with their mean
+/// velocity (momentum kept), until no impact is left. A zone translates rigidly, so two of its
+/// features cannot meet during the substep if they did not touch at its start.
+fn impact_zones(cloth: &mut Hierarchy, m: &mut Motion) -> Result<u32, CollideError> {
+    let n = m.v.len();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let root = |parent: &mut Vec<u32>, mut k: u32| {
+        while parent[k as usize] != k {
+            let up = parent[parent[k as usize] as usize];
+            parent[k as usize] = up;
+            k = up;
+        }
+        k
+    };
+    let mut merged = 0;
+    for _ in 0..ZONE_ROUNDS {
+        cloth.refit_swept(m.x0, m.x, 0.0)?;
+        let impacts = cloth.self_impacts();
+        let mut changed = false;
+        for pair in Pair::list(cloth, &impacts) {
+            let first = root(&mut parent, pair.vertices[0]);
+            for &k in &pair.vertices[1..] {
+                let other = root(&mut parent, k);
+                if other != first {
+                    let (lo, hi) = (first.min(other), first.max(other));
+                    parent[hi as usize] = lo;
+                    changed = true;
+                    merged += 1;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+        let mut momentum = vec![(Vec3::zeros(), 0.0); n];
+        for k in 0..n {
+            let inverse = m.inverse_mass[k];
+            if inverse > 0.0 {
+                let r = root(&mut parent, k as u32) as usize;
+                momentum[r].0 += m.v[k] / inverse;
+                momentum[r].1 += 1.0 / inverse;
+            }
+        }
+        for k in 0..n {
+            if m.inverse_mass[k] > 0.0 {
+                let (p, mass) = momentum[root(&mut parent, k as u32) as usize];
+                m.v[k] = p / mass;
+            }
+        }
+        m.sync_positions();
+    }
+    Ok(merged)
+}
