@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
+use nalgebra::Point3;
 use serde_json::json;
 use tailor_collide::Hierarchy;
 
@@ -47,14 +48,43 @@ pub struct Args {
 
 /// What one frame has wrong.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct Findings {
-    penetrating_vertices: usize,
-    max_penetration: f64,
-    self_intersecting_pairs: usize,
+pub struct Findings {
+    /// Cloth vertices inside the body or closer to it than the thickness.
+    pub penetrating_vertices: usize,
+    /// How far the deepest of them would have to move out to reach the thickness, m.
+    pub max_penetration: f64,
+    /// Face pairs of the cloth that share no vertex and cross.
+    pub self_intersecting_pairs: usize,
+}
+
+/// The findings of one frame: `cloth` and `body` refit at the frame's positions,
+/// `cloth_positions` the cloth's vertices.
+///
+/// # Errors
+/// When a cloth position is not finite.
+pub fn inspect(
+    cloth: &Hierarchy,
+    cloth_positions: &[Point3<f64>],
+    body: Option<&Hierarchy>,
+    thickness: f64,
+) -> Result<Findings> {
+    let mut found = Findings {
+        self_intersecting_pairs: cloth.self_intersections().len(),
+        ..Findings::default()
+    };
+    if let Some(body) = body {
+        let clearance = clearances(body, cloth_positions, thickness)?;
+        for gap in clearance.into_iter().filter(|&g| g < thickness) {
+            found.penetrating_vertices += 1;
+            found.max_penetration = found.max_penetration.max(thickness - gap);
+        }
+    }
+    Ok(found)
 }
 
 impl Findings {
-    fn json(&self) -> serde_json::Value {
+    /// The findings as a JSON object.
+    pub fn json(&self) -> serde_json::Value {
         json!({
             "penetrating_vertices": self.penetrating_vertices,
             "max_penetration": self.max_penetration,
@@ -62,7 +92,8 @@ impl Findings {
         })
     }
 
-    fn is_clean(&self) -> bool {
+    /// Nothing penetrates and nothing crosses.
+    pub fn is_clean(&self) -> bool {
         self.penetrating_vertices == 0 && self.self_intersecting_pairs == 0
     }
 }
@@ -99,34 +130,25 @@ fn check(args: &Args) -> Result<bool> {
     for (frame, cloth_path, body_path) in &frames {
         let cloth_mesh = polymesh_obj::read(cloth_path)?;
         let cloth_h = cloth.hierarchy(&cloth_mesh, cloth_path)?;
-        let mut found = Findings {
-            self_intersecting_pairs: cloth_h.self_intersections().len(),
-            ..Findings::default()
+        let body_h = match body_path {
+            Some(body_path) => {
+                let body_mesh = polymesh_obj::read(body_path)?;
+                let body_h = body.hierarchy(&body_mesh, body_path)?;
+                if !body_h.is_closed() && !warned_open {
+                    eprintln!(
+                        "warning: {} is not closed, so it has no inside; only cloth vertices \
+                         closer than the thickness ({}) are counted",
+                        body_path.display(),
+                        args.thickness
+                    );
+                    warned_open = true;
+                }
+                Some(body_h)
+            }
+            None => None,
         };
-        if let Some(body_path) = body_path {
-            let body_mesh = polymesh_obj::read(body_path)?;
-            let body_h = body.hierarchy(&body_mesh, body_path)?;
-            if !body_h.is_closed() && !warned_open {
-                eprintln!(
-                    "warning: {} is not closed, so it has no inside; only cloth vertices closer \
-                     than the thickness ({}) are counted",
-                    body_path.display(),
-                    args.thickness
-                );
-                warned_open = true;
-            }
-            let clearance = clearances(body_h, &cloth_mesh, args.thickness).with_context(|| {
-                format!(
-                    "checking {} against {}",
-                    cloth_path.display(),
-                    body_path.display()
-                )
-            })?;
-            for gap in clearance.into_iter().filter(|&g| g < args.thickness) {
-                found.penetrating_vertices += 1;
-                found.max_penetration = found.max_penetration.max(args.thickness - gap);
-            }
-        }
+        let found = inspect(cloth_h, &cloth_mesh.positions, body_h, args.thickness)
+            .with_context(|| format!("checking {}", cloth_path.display()))?;
         total.penetrating_vertices += found.penetrating_vertices;
         total.max_penetration = total.max_penetration.max(found.max_penetration);
         total.self_intersecting_pairs += found.self_intersecting_pairs;
@@ -176,11 +198,11 @@ fn frames(args: &Args) -> Result<Vec<(u32, PathBuf, Option<PathBuf>)>> {
 
 /// For each cloth vertex, its signed distance to a closed body (negative inside) or, for an
 /// open body, its distance when closer than `thickness` (infinite otherwise).
-fn clearances(body: &Hierarchy, cloth: &PolyMesh, thickness: f64) -> Result<Vec<f64>> {
+fn clearances(body: &Hierarchy, cloth: &[Point3<f64>], thickness: f64) -> Result<Vec<f64>> {
     if body.is_closed() {
-        return Ok(body.signed_distances(&cloth.positions)?);
+        return Ok(body.signed_distances(cloth)?);
     }
-    let closest = body.closest_points(&cloth.positions, thickness)?;
+    let closest = body.closest_points(cloth, thickness)?;
     Ok(closest
         .iter()
         .map(|c| c.map_or(f64::INFINITY, |c| c.distance))

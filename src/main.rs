@@ -3,13 +3,18 @@
 
 use std::process::ExitCode;
 
-use clap::{CommandFactory, Parser, Subcommand};
+use clap::{Parser, Subcommand};
 
 mod check;
+mod checkpoint;
+mod demo;
 mod info;
 mod output;
 mod polymesh_obj;
+mod preview;
+mod scene;
 mod sequence;
+mod simulate;
 mod subdivide;
 
 /// Subdivision-surface cloth for animated characters (DeRose, Kass & Truong 1998).
@@ -28,6 +33,12 @@ enum Command {
     Info(info::Args),
     /// Check a simulated cloth (or a frame sequence) for body penetration and self-intersection.
     Check(check::Args),
+    /// Simulate a garment on an animated body from a scene file.
+    Simulate(simulate::Args),
+    /// Simulate the built-in demo (a mannequin in a cape) into ./tailor-out/.
+    Demo(demo::Args),
+    /// Draw chosen frames of a simulation output directory as a contact sheet (and a GIF).
+    Preview(preview::Args),
 }
 
 fn main() -> ExitCode {
@@ -36,13 +47,10 @@ fn main() -> ExitCode {
         Some(Command::Subdivide(args)) => subdivide::run(&args),
         Some(Command::Info(args)) => info::run(&args),
         Some(Command::Check(args)) => check::run(&args),
-        None => {
-            // The built-in demo arrives with the simulation pipeline; until then, the help.
-            Cli::command()
-                .print_help()
-                .map(|()| ExitCode::SUCCESS)
-                .map_err(Into::into)
-        }
+        Some(Command::Simulate(args)) => simulate::run(&args),
+        Some(Command::Demo(args)) => demo::run(&args),
+        Some(Command::Preview(args)) => preview::run(&args),
+        None => demo::run(&demo::Args::default()),
     };
     match result {
         Ok(code) => code,

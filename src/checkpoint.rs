@@ -1,0 +1,257 @@
+//! Checkpoints: everything `tailor simulate --resume` needs to continue a run exactly.
+//!
+//! After every frame the simulator's whole state at the frame boundary is written atomically
+//! to `tailor_checkpoint.bin` in the output directory: positions, velocities and the time
+//! (the `f64` the solver accumulates, so later substeps land on the same instants), the frame
+//! number, and the per-frame figures of the summary so far. Nothing else carries over a frame
+//! boundary: attachment targets are recomputed from the body at every frame, the conjugate-
+//! gradient solve starts from zero each substep, and the collision hierarchies are refit from
+//! positions. So a resumed run computes the same bits as an uninterrupted one.
+//!
+//! The format is little-endian binary, every `f64` stored as its exact bits:
+//!
+//! ```text
+//! "TAILORCK"  u32 version  u64 scene fingerprint  u32 frame  f64 time  u32 vertices
+//! vertices × (3 f64 position)  vertices × (3 f64 velocity)
+//! u32 rows  rows × (u32 frame, f64 ms, f64 strain, u32 substeps, u32 cg, u64 penetrating,
+//!                   f64 deepest, u64 self-intersecting pairs)
+//! ```
+//!
+//! The fingerprint ([`crate::scene::Scene::fingerprint`]) refuses a checkpoint of another
+//! scene, garment or body.
+
+use std::fs;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use tailor_cloth::State;
+use tailor_cloth::energy::Vec3;
+use tailor_subdiv::Point;
+
+use crate::check::Findings;
+use crate::output::write_atomically;
+
+const MAGIC: &[u8; 8] = b"TAILORCK";
+const VERSION: u32 = 1;
+
+/// The checkpoint file in an output directory.
+#[must_use]
+pub fn path(dir: &Path) -> PathBuf {
+    dir.join("tailor_checkpoint.bin")
+}
+
+/// The figures of one simulated frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// Frame number.
+    pub frame: u32,
+    /// Wall time of the frame's simulation steps, ms.
+    pub ms: f64,
+    /// Largest |l/L − 1| over the control mesh's edges at the end of the frame.
+    pub max_strain: f64,
+    /// Substeps taken, counting halved retries.
+    pub substeps: u32,
+    /// Conjugate-gradient iterations.
+    pub cg_iterations: u32,
+    /// What `tailor check` finds in the frame's output.
+    pub findings: Findings,
+}
+
+/// A run's state at the end of a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Checkpoint {
+    /// The scene's fingerprint.
+    pub fingerprint: u64,
+    /// The last frame completed.
+    pub frame: u32,
+    /// Positions, velocities and time after it.
+    pub state: State,
+    /// Figures of every frame so far.
+    pub stats: Vec<FrameStats>,
+}
+
+/// Writes `checkpoint` atomically into `dir`.
+///
+/// # Errors
+/// Any I/O error, naming the file.
+pub fn save(dir: &Path, checkpoint: &Checkpoint) -> Result<()> {
+    write_atomically(&path(dir), |w| encode(checkpoint, w))
+}
+
+fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {
+    let count = |n: usize| u32::try_from(n).map_err(io::Error::other);
+    w.write_all(MAGIC)?;
+    w.write_all(&VERSION.to_le_bytes())?;
+    w.write_all(&c.fingerprint.to_le_bytes())?;
+    w.write_all(&c.frame.to_le_bytes())?;
+    w.write_all(&c.state.time.to_le_bytes())?;
+    w.write_all(&count(c.state.positions.len())?.to_le_bytes())?;
+    let coords = c.state.positions.iter().flat_map(|p| p.coords.iter());
+    for x in coords.chain(c.state.velocities.iter().flat_map(|v| v.iter())) {
+        w.write_all(&x.to_le_bytes())?;
+    }
+    w.write_all(&count(c.stats.len())?.to_le_bytes())?;
+    for s in &c.stats {
+        let f = &s.findings;
+        w.write_all(&s.frame.to_le_bytes())?;
+        w.write_all(&s.ms.to_le_bytes())?;
+        w.write_all(&s.max_strain.to_le_bytes())?;
+        w.write_all(&s.substeps.to_le_bytes())?;
+        w.write_all(&s.cg_iterations.to_le_bytes())?;
+        w.write_all(&(f.penetrating_vertices as u64).to_le_bytes())?;
+        w.write_all(&f.max_penetration.to_le_bytes())?;
+        w.write_all(&(f.self_intersecting_pairs as u64).to_le_bytes())?;
+    }
+    Ok(())
+}
+
+/// Reads the checkpoint in `dir`, if there is one, checking it belongs to the scene with
+/// `fingerprint` and a garment of `vertices` vertices.
+///
+/// # Errors
+/// An unreadable, truncated or foreign checkpoint, naming the file.
+pub fn load(dir: &Path, fingerprint: u64, vertices: usize) -> Result<Option<Checkpoint>> {
+    let file = path(dir);
+    let bytes = match fs::read(&file) {
+        Ok(bytes) => bytes,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(e).with_context(|| format!("reading {}", file.display())),
+    };
+    let c = decode(&bytes).with_context(|| format!("reading {}", file.display()))?;
+    if c.fingerprint != fingerprint {
+        bail!(
+            "{} was written for another scene (or its garment or body changed); \
+             run without --resume to start over",
+            file.display()
+        );
+    }
+    if c.state.positions.len() != vertices {
+        bail!(
+            "{} holds {} vertices, the garment has {vertices}",
+            file.display(),
+            c.state.positions.len()
+        );
+    }
+    Ok(Some(c))
+}
+
+/// A cursor over the checkpoint's bytes.
+struct Reader<'a>(&'a [u8]);
+
+impl Reader<'_> {
+    fn take<const N: usize>(&mut self) -> Result<[u8; N]> {
+        let Some((head, rest)) = self.0.split_first_chunk::<N>() else {
+            bail!("the file is truncated");
+        };
+        self.0 = rest;
+        Ok(*head)
+    }
+
+    fn u32(&mut self) -> Result<u32> {
+        self.take().map(u32::from_le_bytes)
+    }
+
+    fn u64(&mut self) -> Result<u64> {
+        self.take().map(u64::from_le_bytes)
+    }
+
+    fn f64(&mut self) -> Result<f64> {
+        self.take().map(f64::from_le_bytes)
+    }
+
+    fn vec3(&mut self) -> Result<Vec3> {
+        Ok(Vec3::new(self.f64()?, self.f64()?, self.f64()?))
+    }
+
+    fn count(&mut self) -> Result<usize> {
+        Ok(usize::try_from(self.u64()?)?)
+    }
+}
+
+fn decode(bytes: &[u8]) -> Result<Checkpoint> {
+    let mut r = Reader(bytes);
+    if &r.take::<8>()? != MAGIC {
+        bail!("not a tailor checkpoint");
+    }
+    let version = r.u32()?;
+    if version != VERSION {
+        bail!("checkpoint version {version}; this tailor reads version {VERSION}");
+    }
+    let fingerprint = r.u64()?;
+    let frame = r.u32()?;
+    let time = r.f64()?;
+    let n = r.u32()? as usize;
+    let positions = (0..n)
+        .map(|_| r.vec3().map(Point::from))
+        .collect::<Result<_>>()?;
+    let velocities = (0..n).map(|_| r.vec3()).collect::<Result<_>>()?;
+    let rows = r.u32()?;
+    let stats = (0..rows)
+        .map(|_| {
+            Ok(FrameStats {
+                frame: r.u32()?,
+                ms: r.f64()?,
+                max_strain: r.f64()?,
+                substeps: r.u32()?,
+                cg_iterations: r.u32()?,
+                findings: Findings {
+                    penetrating_vertices: r.count()?,
+                    max_penetration: r.f64()?,
+                    self_intersecting_pairs: r.count()?,
+                },
+            })
+        })
+        .collect::<Result<_>>()?;
+    if !r.0.is_empty() {
+        bail!("{} unexpected bytes at the end", r.0.len());
+    }
+    Ok(Checkpoint {
+        fingerprint,
+        frame,
+        state: State {
+            positions,
+            velocities,
+            time,
+        },
+        stats,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trips_exact_bits_and_rejects_damage() {
+        let c = Checkpoint {
+            fingerprint: 0x1234_5678_9abc_def0,
+            frame: 7,
+            state: State {
+                positions: vec![Point::new(0.1, -2.5e-300, 1.0 / 3.0); 2],
+                velocities: vec![Vec3::new(f64::MIN_POSITIVE, -0.0, 7.0); 2],
+                time: 7.0 / 24.0,
+            },
+            stats: vec![FrameStats {
+                frame: 7,
+                ms: 12.5,
+                max_strain: 0.03,
+                substeps: 5,
+                cg_iterations: 40,
+                findings: Findings {
+                    penetrating_vertices: 3,
+                    max_penetration: 0.001,
+                    self_intersecting_pairs: 1,
+                },
+            }],
+        };
+        let mut bytes = Vec::new();
+        encode(&c, &mut bytes).unwrap();
+        let back = decode(&bytes).unwrap();
+        assert_eq!(back, c);
+        assert!(back.state.velocities[0].y.is_sign_negative());
+        assert!(decode(&bytes[..bytes.len() - 1]).is_err());
+        bytes[0] = b'X';
+        assert!(decode(&bytes).is_err());
+    }
+}

@@ -1,0 +1,375 @@
+//! `tailor simulate SCENE.toml`: run one shot.
+//!
+//! The scene is read and validated whole first ([`crate::scene`]); nothing is written before
+//! it passes. Then, built once: the garment's mass-spring [`Model`] and [`Simulator`]
+//! (substeps of 1 / (fps · substeps) seconds: time is in seconds, never frames), the stencils
+//! of its output surface, the body's stencils and collision hierarchy, and the attachment
+//! [`Bindings`](attach::Bindings) made on the body's first frame; the refined body is the
+//! simulator's obstacle. Per frame: the body's refined surface at the frame's end, attachment
+//! targets and the obstacle moving on the straight line between the two poses, the implicit
+//! steps (with the scene's thickness, friction and self-collision), then `cloth_control_####.obj`, `cloth_####.obj` and the
+//! refined `body_####.obj`, each written atomically, the figures of `tailor check`'s test
+//! ([`crate::check::inspect`]) and a checkpoint ([`crate::checkpoint`]). Frame 0 is the rest
+//! pose. A step that fails (a non-finite value, a solve that does not converge after the
+//! simulator's retries) or stretches an edge past [`MAX_STRAIN`] stops the run with an error
+//! naming the frame; the frame is not written, so nothing non-finite reaches the disk.
+//!
+//! Work runs on a rayon pool of `--threads` threads; every parallel loop in the crates reduces
+//! in a fixed order, so the bytes written do not depend on the count.
+
+mod attach;
+mod summary;
+mod surface;
+
+use std::fs;
+use std::io::IsTerminal;
+use std::num::NonZeroUsize;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::str::FromStr;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use tailor_cloth::{Model, Motion, Settings, Simulator, State};
+use tailor_subdiv::Mesh;
+
+use crate::checkpoint::{self, Checkpoint, FrameStats};
+use crate::output::write_atomically;
+use crate::scene::{self, Scene};
+use attach::Bindings;
+use surface::Surface;
+
+/// Strain (|l/L − 1| of an edge) past which a run counts as diverged: an edge ten times
+/// its rest length is an explosion, not cloth.
+pub const MAX_STRAIN: f64 = 10.0;
+
+/// Arguments of `tailor simulate`.
+#[derive(clap::Args, Debug, Clone)]
+#[command(
+    after_help = "Writes per frame cloth_control_####.obj (the simulated control mesh, \
+with UVs and groups), cloth_####.obj (its Catmull-Clark surface) and body_####.obj (the refined \
+body), frame 0 being the rest pose; then summary.json. A checkpoint (tailor_checkpoint.bin) is \
+written after every frame for --resume. Exit status: 0 done, 1 bad scene or a diverging \
+simulation, 2 bad arguments."
+)]
+pub struct Args {
+    /// Scene file (TOML; see assets/scenes/cape.toml).
+    pub scene: PathBuf,
+    /// Output directory, instead of the scene's `[output] dir`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Frames to write, both ends included: `A..B`, `A..` or `..B` (default: 0 to the
+    /// scene's `frames`). Frames before A are simulated but not written.
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<FrameRange>,
+    /// Worker threads (default: one per core). The output is the same for any count.
+    #[arg(long, value_name = "N")]
+    pub threads: Option<NonZeroUsize>,
+    /// Continue from the checkpoint in the output directory (from the start if there is none).
+    #[arg(long)]
+    pub resume: bool,
+    /// No progress bar or notes on standard error.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Stop after writing this frame and its checkpoint, as if interrupted (for tests).
+    #[arg(long, hide = true, value_name = "FRAME")]
+    pub stop_after: Option<u32>,
+}
+
+/// An inclusive range of frame numbers; either end may be left open.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameRange {
+    /// First frame written (0 when open).
+    pub start: Option<u32>,
+    /// Last frame simulated and written (the scene's `frames` when open).
+    pub end: Option<u32>,
+}
+
+impl FromStr for FrameRange {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let Some((a, b)) = s.split_once("..") else {
+            return Err(format!("{s:?} is not a range such as 10..20, 10.. or ..20"));
+        };
+        let end = |x: &str| -> Result<Option<u32>, String> {
+            let x = x.trim();
+            if x.is_empty() {
+                Ok(None)
+            } else {
+                x.parse()
+                    .map(Some)
+                    .map_err(|_| format!("{x:?} is not a frame number"))
+            }
+        };
+        let range = Self {
+            start: end(a)?,
+            end: end(b.strip_prefix('=').unwrap_or(b))?,
+        };
+        if let (Some(a), Some(b)) = (range.start, range.end)
+            && a > b
+        {
+            return Err(format!("the range {s} is empty"));
+        }
+        Ok(range)
+    }
+}
+
+/// Runs `tailor simulate`.
+///
+/// # Errors
+/// A bad scene, an unwritable output, or a diverging simulation.
+pub fn run(args: &Args) -> Result<ExitCode> {
+    run_in_pool(args).map(|_| ExitCode::SUCCESS)
+}
+
+/// Simulates the scene on a pool of `args.threads` threads; returns the output directory.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_in_pool(args: &Args) -> Result<PathBuf> {
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = args.threads {
+        pool = pool.num_threads(n.get());
+    }
+    let pool = pool.build().context("starting worker threads")?;
+    pool.install(|| simulate(args))
+}
+
+fn simulate(args: &Args) -> Result<PathBuf> {
+    let range = args.frames.unwrap_or_default();
+    let scene = scene::load(&args.scene, range.end)?;
+    let first = range.start.unwrap_or(0);
+    let last = range.end.unwrap_or(scene.frames);
+    let dir = args.out.clone().unwrap_or_else(|| scene.output.dir.clone());
+    let mut shot = Shot::new(&scene)?;
+    let vertex_count = scene.cloth.doc.mesh.vertex_count();
+    let resumed = if args.resume {
+        checkpoint::load(&dir, scene.fingerprint, vertex_count)?
+    } else {
+        None
+    };
+    if args.resume && resumed.is_none() && !args.quiet {
+        eprintln!(
+            "note: no checkpoint in {}; starting from frame 0",
+            dir.display()
+        );
+    }
+    let (mut state, mut stats, next) = match resumed {
+        Some(c) => (c.state, c.stats, c.frame + 1),
+        None => (State::at_rest(shot.simulator.model()), Vec::new(), 0),
+    };
+    fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    if next > 0 {
+        shot.pose_body(next - 1)?;
+    }
+    let progress = progress_bar(
+        u64::from(last.saturating_sub(next) + 1),
+        args.quiet || next > last,
+    );
+    for frame in next..=last {
+        let start = Instant::now();
+        let mut row = FrameStats {
+            frame,
+            ..FrameStats::default()
+        };
+        if frame > 0 {
+            shot.step(&mut state, frame, &mut row)
+                .with_context(|| format!("simulating frame {frame} of {}", scene.path.display()))?;
+        }
+        row.ms = start.elapsed().as_secs_f64() * 1e3;
+        shot.finish(&state, &mut row)?;
+        if frame >= first {
+            shot.write(&dir, frame, &state)?;
+        }
+        stats.push(row);
+        checkpoint::save(
+            &dir,
+            &Checkpoint {
+                fingerprint: scene.fingerprint,
+                frame,
+                state: state.clone(),
+                stats: stats.clone(),
+            },
+        )?;
+        progress.set_message(format!(
+            "{:.0} ms/frame",
+            start.elapsed().as_secs_f64() * 1e3
+        ));
+        progress.inc(1);
+        if args.stop_after == Some(frame) {
+            progress.abandon();
+            if !args.quiet {
+                eprintln!("stopped after frame {frame}, as asked");
+            }
+            return Ok(dir);
+        }
+    }
+    progress.finish_and_clear();
+    summary::report(&scene.path, &dir, scene.cloth.thickness, &stats)?;
+    println!(
+        "frames {first} to {last}: {}",
+        dir.join("cloth_####.obj").display()
+    );
+    Ok(dir)
+}
+
+/// A progress bar on standard error with frame, ms/frame and ETA; hidden when standard error
+/// is not a terminal or when asked.
+fn progress_bar(frames: u64, hidden: bool) -> ProgressBar {
+    let target = if hidden || !std::io::stderr().is_terminal() {
+        ProgressDrawTarget::hidden()
+    } else {
+        ProgressDrawTarget::stderr()
+    };
+    let bar = ProgressBar::with_draw_target(Some(frames), target);
+    bar.set_style(
+        ProgressStyle::with_template("[{bar:30}] frame {pos}/{len} · {msg} · ETA {eta}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.enable_steady_tick(Duration::from_millis(500));
+    bar
+}
+
+/// The animated body as the simulation sees it.
+struct BodyTrack {
+    surface: Surface,
+    bindings: Bindings,
+}
+
+/// Everything built once for a shot.
+struct Shot<'a> {
+    scene: &'a Scene,
+    simulator: Simulator,
+    /// The garment's control mesh, its positions replaced each frame for writing.
+    control: Mesh,
+    cloth: Surface,
+    body: Option<BodyTrack>,
+    /// Seconds per frame.
+    dt: f64,
+}
+
+impl<'a> Shot<'a> {
+    fn new(scene: &'a Scene) -> Result<Self> {
+        let c = &scene.cloth;
+        let in_cloth = || format!("building the cloth model of {}", c.path.display());
+        let mut model = Model::new(&c.doc.mesh, &c.material).with_context(in_cloth)?;
+        for (which, values) in &c.multipliers {
+            model
+                .set_multipliers(*which, values)
+                .with_context(in_cloth)?;
+        }
+        let settings = Settings {
+            max_substep: 1.0 / (scene.fps * f64::from(scene.substeps)),
+            gravity: scene.gravity,
+            thickness: c.thickness,
+            friction: c.friction,
+            self_collision: c.self_collision,
+            ..Settings::default()
+        };
+        let mut simulator = Simulator::new(model, settings).with_context(in_cloth)?;
+        simulator
+            .pin(&c.pins, Motion::Fixed)
+            .with_context(in_cloth)?;
+        let out = &scene.output;
+        let cloth = Surface::new(&c.doc.mesh, out.level, out.limit_normals)?;
+        let body = match &scene.body {
+            Some(b) => {
+                let surface = Surface::new(&b.rest, b.level, false)?;
+                let bindings = Bindings::new(
+                    surface.hierarchy(),
+                    surface.mesh().positions(),
+                    c.doc.mesh.positions(),
+                    &c.attach,
+                )?;
+                let rest = surface.mesh();
+                simulator
+                    .set_obstacle(rest.positions(), rest.face_offsets(), rest.face_vertices())
+                    .context("making the refined body the obstacle")?;
+                Some(BodyTrack { surface, bindings })
+            }
+            None => None,
+        };
+        Ok(Self {
+            scene,
+            simulator,
+            control: c.doc.mesh.clone(),
+            cloth,
+            body,
+            dt: 1.0 / scene.fps,
+        })
+    }
+
+    /// Puts the body at simulation frame `frame` (when resuming).
+    fn pose_body(&mut self, frame: u32) -> Result<()> {
+        if let (Some(track), Some(body)) = (&mut self.body, &self.scene.body) {
+            let refined = track.surface.refine(body.control(frame));
+            track.surface.set(&refined)?;
+        }
+        Ok(())
+    }
+
+    /// Steps from the end of frame `frame − 1` to the end of `frame`.
+    fn step(&mut self, state: &mut State, frame: u32, row: &mut FrameStats) -> Result<()> {
+        if let (Some(track), Some(body)) = (&mut self.body, &self.scene.body) {
+            let end = track.surface.refine(body.control(frame));
+            let start = track.surface.mesh().positions();
+            let targets = track.bindings.targets(start, &end, self.dt);
+            self.simulator
+                .set_attachment_targets(state.time, &targets)?;
+            let t0 = state.time;
+            self.simulator
+                .set_obstacle_motion(t0, start, t0 + self.dt, &end)?;
+            track.surface.set(&end)?;
+        }
+        let report = self.simulator.step(state, self.dt)?;
+        row.substeps = report.substeps;
+        row.cg_iterations = report.cg_iterations;
+        Ok(())
+    }
+
+    /// Evaluates the frame's surface and the figures of `tailor check`'s test.
+    fn finish(&mut self, state: &State, row: &mut FrameStats) -> Result<()> {
+        row.max_strain = self.simulator.model().max_strain(&state.positions);
+        if row.max_strain.is_nan() || row.max_strain > MAX_STRAIN {
+            bail!(
+                "frame {}: the simulation diverged (an edge stretched to {:.0}% strain); \
+                 try more substeps or a stiffer material",
+                row.frame,
+                row.max_strain * 100.0
+            );
+        }
+        let refined = self.cloth.refine(&state.positions);
+        self.cloth.set(&refined)?;
+        row.findings = crate::check::inspect(
+            self.cloth.hierarchy(),
+            self.cloth.mesh().positions(),
+            self.body.as_ref().map(|b| b.surface.hierarchy()),
+            self.scene.cloth.thickness,
+        )
+        .with_context(|| format!("checking frame {}", row.frame))?;
+        Ok(())
+    }
+
+    /// Writes frame `frame`'s files into `dir`.
+    fn write(&mut self, dir: &Path, frame: u32, state: &State) -> Result<()> {
+        let name = |prefix: &str| dir.join(format!("{prefix}_{frame:04}.obj"));
+        let out = &self.scene.output;
+        if out.control_mesh {
+            self.control.set_positions(&state.positions)?;
+            let groups = &self.scene.cloth.doc.groups;
+            write_atomically(&name("cloth_control"), |w| {
+                surface::write_with_groups(&self.control, groups, w)
+            })?;
+        }
+        self.cloth.write(&name("cloth"), &state.positions)?;
+        if out.body
+            && let (Some(track), Some(body)) = (&self.body, &self.scene.body)
+        {
+            track.surface.write(&name("body"), body.control(frame))?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,85 @@
+//! The end-of-run summary: time per frame, the worst edge strain, and what `tailor check`'s
+//! test finds (body penetrations, self-intersections), on standard output and as
+//! `summary.json` in the output directory.
+
+use std::path::Path;
+
+use anyhow::Result;
+use serde_json::json;
+
+use crate::checkpoint::FrameStats;
+use crate::output::write_atomically;
+
+/// Prints the summary of `stats` (every frame simulated so far) and writes `summary.json`.
+///
+/// # Errors
+/// When `summary.json` cannot be written.
+pub fn report(scene: &Path, dir: &Path, thickness: f64, stats: &[FrameStats]) -> Result<()> {
+    let stepped: Vec<&FrameStats> = stats.iter().filter(|s| s.frame > 0).collect();
+    let total_ms: f64 = stepped.iter().map(|s| s.ms).sum();
+    let mean_ms = total_ms / stepped.len().max(1) as f64;
+    let worst = stats
+        .iter()
+        .max_by(|a, b| a.max_strain.total_cmp(&b.max_strain))
+        .copied()
+        .unwrap_or_default();
+    let penetrating: usize = stats.iter().map(|s| s.findings.penetrating_vertices).sum();
+    let deepest = stats
+        .iter()
+        .map(|s| s.findings.max_penetration)
+        .fold(0.0, f64::max);
+    let crossing: usize = stats
+        .iter()
+        .map(|s| s.findings.self_intersecting_pairs)
+        .sum();
+    let dirty = stats.iter().filter(|s| !s.findings.is_clean()).count();
+    println!(
+        "{}: {} frames simulated in {:.1} s ({mean_ms:.0} ms per frame)",
+        scene.display(),
+        stepped.len(),
+        total_ms / 1e3
+    );
+    println!(
+        "worst edge strain {:.2}% (frame {})",
+        worst.max_strain * 100.0,
+        worst.frame
+    );
+    println!(
+        "tailor check (thickness {thickness} m): {penetrating} penetrating vertices (deepest \
+         {deepest:.4} m), {crossing} self-intersecting face pairs, {dirty} of {} frames not clean",
+        stats.len()
+    );
+    let frames: Vec<_> = stats
+        .iter()
+        .map(|s| {
+            let mut row = s.findings.json();
+            row["frame"] = json!(s.frame);
+            row["ms"] = json!(s.ms);
+            row["max_strain"] = json!(s.max_strain);
+            row["substeps"] = json!(s.substeps);
+            row["cg_iterations"] = json!(s.cg_iterations);
+            row
+        })
+        .collect();
+    let summary = json!({
+        "scene": scene.display().to_string(),
+        "thickness": thickness,
+        "frames": frames,
+        "total": {
+            "frames_simulated": stepped.len(),
+            "ms": total_ms,
+            "ms_per_frame": mean_ms,
+            "max_strain": worst.max_strain,
+            "max_strain_frame": worst.frame,
+            "penetrating_vertices": penetrating,
+            "max_penetration": deepest,
+            "self_intersecting_pairs": crossing,
+            "frames_not_clean": dirty,
+        },
+    });
+    let text = serde_json::to_string_pretty(&summary)? + "\n";
+    let path = dir.join("summary.json");
+    write_atomically(&path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+    println!("summary: {}", path.display());
+    Ok(())
+}

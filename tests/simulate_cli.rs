@@ -1,0 +1,363 @@
+//! `tailor simulate` end to end on a small generated shot: a 5 × 5-quad sheet attached by one
+//! row to the top of a cube, draping over its edge, 10 frames.
+//!
+//! - The output reproduces the committed golden files (`tests/golden/simulate/`) within a
+//!   tolerance; regenerate them only on purpose, with
+//!   `TAILOR_BLESS=1 cargo test --test simulate_cli`, and say why in the commit.
+//! - The bytes do not depend on the thread count.
+//! - A run stopped after a frame and resumed writes the same bytes as one uninterrupted run.
+//! - Each bad input is refused before anything is written, with a message naming the file and
+//!   the key or line, and leaves an earlier run's output untouched.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A fresh directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("simulate_cli_{name}"));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn tailor(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tailor"))
+        .arg("simulate")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// A closed unit cube `[0, 1]³`, faces counter-clockwise seen from outside, moved by `dx`.
+fn cube(dx: f64) -> String {
+    let mut text = String::new();
+    for (x, y, z) in [
+        (0, 0, 0),
+        (1, 0, 0),
+        (0, 1, 0),
+        (1, 1, 0),
+        (0, 0, 1),
+        (1, 0, 1),
+        (0, 1, 1),
+        (1, 1, 1),
+    ] {
+        text += &format!("v {} {y} {z}\n", f64::from(x) + dx);
+    }
+    text + "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n"
+}
+
+/// A 5 × 5-quad sheet in the plane y = 1.1 (over the cube), from z = 0.3 to 1.3, so that
+/// it sticks out over the cube's front edge and drapes over it, with UVs and the groups `sheet`
+/// (every face) and `top` (the row at the back, attached to the cube's top).
+fn sheet() -> String {
+    let n = 5;
+    let mut text = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (u, v) = (f64::from(i) / f64::from(n), f64::from(j) / f64::from(n));
+            text += &format!("v {} 1.1 {}\n", 0.1 + 0.8 * u, 0.3 + v);
+        }
+    }
+    for j in 0..=n {
+        for i in 0..=n {
+            text += &format!("vt {} {}\n", f64::from(i) / 5.0, f64::from(j) / 5.0);
+        }
+    }
+    for j in 0..n {
+        text += if j == 0 { "g sheet top\n" } else { "g sheet\n" };
+        for i in 0..n {
+            let a = j * (n + 1) + i + 1;
+            let (b, c, d) = (a + 1, a + n + 2, a + n + 1);
+            text += &format!("f {a}/{a} {b}/{b} {c}/{c} {d}/{d}\n");
+        }
+    }
+    text
+}
+
+const SCENE: &str = r#"[scene]
+fps = 24
+frames = 10
+substeps = 4
+
+[cloth]
+mesh = "sheet.obj"
+material = "cotton"
+density = 0.2
+thickness = 0.01
+pins = []
+attach = ["top"]
+stiffen = { top = 2.0 }
+
+[body]
+mesh = "cube.obj"
+subdivision_level = 1
+
+[output]
+dir = "out"
+subdivision_level = 1
+"#;
+
+/// Text replacements `(from, to)` applied to the scene.
+type Edit<'a> = &'a [(&'a str, &'a str)];
+
+/// Writes the shot's files into `dir`, the scene with `edit` applied (`(from, to)` text
+/// replacements); returns the scene's path.
+fn shot(dir: &Path, edit: Edit) -> PathBuf {
+    fs::write(dir.join("sheet.obj"), sheet()).unwrap();
+    fs::write(dir.join("cube.obj"), cube(0.0)).unwrap();
+    let mut scene = SCENE.to_owned();
+    for (from, to) in edit {
+        assert!(scene.contains(from), "{from:?} not in the scene");
+        scene = scene.replace(from, to);
+    }
+    let path = dir.join("scene.toml");
+    fs::write(&path, scene).unwrap();
+    path
+}
+
+/// The files in `dir` whose names pass `keep`, by name.
+fn files(dir: &Path, keep: fn(&str) -> bool) -> BTreeMap<String, Vec<u8>> {
+    fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), p))
+        .filter(|(name, _)| keep(name))
+        .map(|(name, p)| (name, fs::read(&p).unwrap()))
+        .collect()
+}
+
+/// Every OBJ in `dir`, by name.
+fn objs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    files(dir, |name| name.ends_with(".obj"))
+}
+
+/// Every file in `dir`, by name.
+fn everything(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    files(dir, |_| true)
+}
+
+fn run_ok(args: &[&str]) -> Output {
+    let out = tailor(args);
+    assert!(
+        out.status.success(),
+        "tailor simulate {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Compares an OBJ with its golden file: the same tokens, numbers within 1e-9 relative.
+fn golden(name: &str, produced: &[u8]) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden/simulate")
+        .join(name);
+    if std::env::var_os("TAILOR_BLESS").is_some() {
+        fs::create_dir_all(path.parent().unwrap()).unwrap();
+        fs::write(&path, produced).unwrap();
+        return;
+    }
+    let expected = fs::read_to_string(&path)
+        .unwrap_or_else(|_| panic!("missing golden file {}", path.display()));
+    let produced = String::from_utf8(produced.to_vec()).unwrap();
+    let (a, b): (Vec<_>, Vec<_>) = (expected.lines().collect(), produced.lines().collect());
+    assert_eq!(a.len(), b.len(), "{name}: line count differs from golden");
+    for (line, (a, b)) in a.iter().zip(&b).enumerate() {
+        let (ta, tb): (Vec<_>, Vec<_>) = (a.split(' ').collect(), b.split(' ').collect());
+        let same = ta.len() == tb.len()
+            && ta.iter().zip(&tb).all(|(x, y)| {
+                x == y
+                    || match (x.parse::<f64>(), y.parse::<f64>()) {
+                        (Ok(x), Ok(y)) => (x - y).abs() <= 1e-9 * x.abs().max(y.abs()).max(1.0),
+                        _ => false,
+                    }
+            });
+        assert!(
+            same,
+            "{name}:{}: {b:?} differs from golden {a:?} (TAILOR_BLESS=1 regenerates)",
+            line + 1
+        );
+    }
+}
+
+#[test]
+fn short_shot_matches_golden_with_one_and_two_threads() {
+    let dir = scratch("golden");
+    let scene = shot(&dir, &[]);
+    let scene = scene.to_str().unwrap();
+    let one = dir.join("one");
+    let two = dir.join("two");
+    let out = run_ok(&[scene, "--out", one.to_str().unwrap(), "--threads", "1"]);
+    run_ok(&[
+        scene,
+        "--out",
+        two.to_str().unwrap(),
+        "--threads",
+        "2",
+        "--quiet",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("10 frames simulated"), "{stdout}");
+    assert!(
+        out.stderr.is_empty(),
+        "no progress bar off a terminal: {:?}",
+        out.stderr
+    );
+
+    let files = objs(&one);
+    assert_eq!(
+        files.len(),
+        3 * 11,
+        "cloth, control and body for frames 0..=10"
+    );
+    assert!(
+        files == objs(&two),
+        "--threads 1 and 2 wrote different bytes"
+    );
+    for name in [
+        "cloth_control_0005.obj",
+        "cloth_control_0010.obj",
+        "cloth_0010.obj",
+    ] {
+        golden(name, &files[name]);
+    }
+    let control = String::from_utf8_lossy(&files["cloth_control_0000.obj"]).into_owned();
+    assert!(control.contains("g sheet top\n") && control.contains("vt "));
+    assert_eq!(control.lines().filter(|l| l.starts_with("v ")).count(), 36);
+
+    let summary: serde_json::Value =
+        serde_json::from_slice(&fs::read(one.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["frames"].as_array().unwrap().len(), 11);
+    assert_eq!(summary["total"]["frames_simulated"], 10);
+    assert!(summary["total"]["max_strain"].as_f64().unwrap() < 0.5);
+}
+
+#[test]
+fn stopped_and_resumed_run_writes_the_same_bytes() {
+    let dir = scratch("resume");
+    let scene = shot(&dir, &[]);
+    let scene = scene.to_str().unwrap();
+    let whole = dir.join("whole");
+    let parts = dir.join("parts");
+    let (whole_s, parts_s) = (whole.to_str().unwrap(), parts.to_str().unwrap());
+    run_ok(&[scene, "--out", whole_s]);
+    run_ok(&[scene, "--out", parts_s, "--stop-after", "7", "--quiet"]);
+    assert!(parts.join("cloth_0007.obj").exists());
+    assert!(!parts.join("cloth_0008.obj").exists());
+    run_ok(&[scene, "--out", parts_s, "--resume", "--quiet"]);
+    let (a, b) = (objs(&whole), objs(&parts));
+    assert_eq!(a.len(), b.len());
+    for (name, bytes) in &a {
+        assert!(bytes == &b[name], "{name} differs after resuming");
+    }
+    // A checkpoint of another scene is refused.
+    shot(&dir, &[("density = 0.2", "density = 0.3")]);
+    let out = tailor(&[scene, "--out", parts_s, "--resume"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("another scene"));
+}
+
+#[test]
+fn bad_input_is_refused_before_anything_is_written() {
+    let dir = scratch("bad");
+    let scene = shot(&dir, &[]);
+    let out_dir = dir.join("out");
+    run_ok(&[scene.to_str().unwrap(), "--frames", "..2", "--quiet"]);
+    let before = everything(&out_dir);
+    assert!(before.contains_key("cloth_0002.obj"));
+
+    let nan_sheet = sheet().replacen("v 0.1 1.1 0.3", "v 0.1 nan 0.3", 1);
+    fs::write(dir.join("nan.obj"), nan_sheet).unwrap();
+    let seq = dir.join("seq");
+    fs::create_dir_all(&seq).unwrap();
+    fs::write(seq.join("body_0000.obj"), cube(0.0)).unwrap();
+    fs::write(seq.join("body_0001.obj"), cube(0.01)).unwrap();
+    let changed = cube(0.02).replace("f 2 4 8 6\n", "f 2 4 8\nf 2 8 6\n");
+    fs::write(seq.join("body_0002.obj"), changed).unwrap();
+
+    let cases: &[(Edit, &[&str])] = &[
+        (
+            &[("sheet.obj", "missing.obj")],
+            &["[cloth] mesh", "missing.obj"],
+        ),
+        (&[("sheet.obj", "nan.obj")], &["nan.obj:1:", "not finite"]),
+        (
+            &[
+                ("frames = 10", "frames = 2"),
+                (
+                    "mesh = \"cube.obj\"",
+                    "mesh = \"seq/body_####.obj\"\nfirst_frame = 0",
+                ),
+            ],
+            &["[body] mesh", "body_0002.obj", "topology"],
+        ),
+        (
+            &[(
+                "mesh = \"cube.obj\"",
+                "mesh = \"seq/body_####.obj\"\nfirst_frame = 1",
+            )],
+            &["[body] mesh", "body_0003.obj does not exist"],
+        ),
+        (
+            &[("mesh = \"cube.obj\"", "mesh = \"nobody.obj\"")],
+            &["[body] mesh", "nobody.obj"],
+        ),
+        (
+            &[("pins = []", "pins = [\"collar\"]")],
+            &["[cloth] pins[0]", "group \"collar\"", "sheet, top"],
+        ),
+        (
+            &[("attach = [\"top\"]", "attach = [\"top\", 36]")],
+            &["[cloth] attach[1]", "vertex 36"],
+        ),
+        (
+            &[("attach = [\"top\"]", "attach = [-1]")],
+            &["[cloth] attach[0]", "vertex -1"],
+        ),
+        (
+            &[("stiffen = { top = 2.0 }", "stiffen = { hem = 2.0 }")],
+            &["stiffen.hem", "\"hem\""],
+        ),
+        (
+            &[("density = 0.2", "density = -0.2")],
+            &["[cloth] density", "-0.2"],
+        ),
+        (&[("density = 0.2", "density = 0.0")], &["[cloth] density"]),
+        (
+            &[("thickness = 0.01", "thickness = 0")],
+            &["[cloth] thickness", "> 0"],
+        ),
+        (
+            &[("thickness = 0.01", "thicknes = 0.01")],
+            &["scene.toml", "unknown field `thicknes`"],
+        ),
+        (
+            &[("material = \"cotton\"", "material = \"tweed\"")],
+            &["[cloth] material", "tweed"],
+        ),
+        (&[("fps = 24", "fps = 0")], &["[scene] fps"]),
+    ];
+    for (edit, expected) in cases {
+        let scene = shot(&dir, edit);
+        let out = tailor(&[scene.to_str().unwrap(), "--quiet"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{edit:?}: {stderr}");
+        assert!(
+            stderr.contains("scene.toml") || stderr.contains(".obj"),
+            "{stderr}"
+        );
+        for e in *expected {
+            assert!(stderr.contains(e), "{edit:?}: {e:?} not in {stderr:?}");
+        }
+        assert!(
+            everything(&out_dir) == before,
+            "{edit:?} changed the earlier output"
+        );
+    }
+
+    let scene = shot(&dir, &[]);
+    let out = tailor(&[scene.to_str().unwrap(), "--frames", "5..2"]);
+    assert_eq!(out.status.code(), Some(2), "a usage error");
+    assert!(everything(&out_dir) == before);
+}
