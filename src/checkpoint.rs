@@ -2,17 +2,18 @@
 //!
 //! After every frame the simulator's whole state at the frame boundary is written atomically
 //! to `tailor_checkpoint.bin` in the output directory: positions, velocities and the time
-//! (the `f64` the solver accumulates, so later substeps land on the same instants), the frame
-//! number, and the per-frame figures of the summary so far. Nothing else carries over a frame
-//! boundary: attachment targets are recomputed from the body at every frame, the conjugate-
-//! gradient solve starts from zero each substep, and the collision hierarchies are refit from
-//! positions. So a resumed run computes the same bits as an uninterrupted one.
+//! (the `f64` the solver accumulates, so later substeps land on the same instants), the
+//! contacts carried into the next step ([`tailor_cloth::Simulator::carried_contacts`]), the
+//! frame number, and the per-frame figures of the summary so far. Nothing else carries over a
+//! frame boundary: attachment targets are recomputed from the body at every frame, the
+//! conjugate-gradient solve starts from zero each substep, and the collision hierarchies are
+//! refit from positions. So a resumed run computes the same bits as an uninterrupted one.
 //!
 //! The format is little-endian binary, every `f64` stored as its exact bits:
 //!
 //! ```text
 //! "TAILORCK"  u32 version  u64 scene fingerprint  u32 frame  f64 time  u32 vertices
-//! vertices × (3 f64 position)  vertices × (3 f64 velocity)
+//! vertices × (3 f64 position)  vertices × (3 f64 velocity)  vertices × (u8 carried contact)
 //! u32 rows  rows × (u32 frame, f64 ms, f64 strain, u32 substeps, u32 cg, u64 penetrating,
 //!                   f64 deepest, u64 self-intersecting pairs)
 //! ```
@@ -33,7 +34,7 @@ use crate::check::Findings;
 use crate::output::write_atomically;
 
 const MAGIC: &[u8; 8] = b"TAILORCK";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// The checkpoint file in an output directory.
 #[must_use]
@@ -67,6 +68,8 @@ pub struct Checkpoint {
     pub frame: u32,
     /// Positions, velocities and time after it.
     pub state: State,
+    /// The simulator's carried contacts after it, one flag per vertex.
+    pub carried_contacts: Vec<bool>,
     /// Figures of every frame so far.
     pub stats: Vec<FrameStats>,
 }
@@ -91,6 +94,8 @@ fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {
     for x in coords.chain(c.state.velocities.iter().flat_map(|v| v.iter())) {
         w.write_all(&x.to_le_bytes())?;
     }
+    let flags: Vec<u8> = c.carried_contacts.iter().map(|&b| u8::from(b)).collect();
+    w.write_all(&flags)?;
     w.write_all(&count(c.stats.len())?.to_le_bytes())?;
     for s in &c.stats {
         let f = &s.findings;
@@ -186,6 +191,13 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
         .map(|_| r.vec3().map(Point::from))
         .collect::<Result<_>>()?;
     let velocities = (0..n).map(|_| r.vec3()).collect::<Result<_>>()?;
+    let carried_contacts = (0..n)
+        .map(|_| match r.take::<1>()? {
+            [0] => Ok(false),
+            [1] => Ok(true),
+            [x] => bail!("bad contact flag {x}"),
+        })
+        .collect::<Result<_>>()?;
     let rows = r.u32()?;
     let stats = (0..rows)
         .map(|_| {
@@ -214,6 +226,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
             velocities,
             time,
         },
+        carried_contacts,
         stats,
     })
 }
@@ -232,6 +245,7 @@ mod tests {
                 velocities: vec![Vec3::new(f64::MIN_POSITIVE, -0.0, 7.0); 2],
                 time: 7.0 / 24.0,
             },
+            carried_contacts: vec![true, false],
             stats: vec![FrameStats {
                 frame: 7,
                 ms: 12.5,

@@ -157,7 +157,11 @@ fn simulate(args: &Args) -> Result<PathBuf> {
         );
     }
     let (mut state, mut stats, next) = match resumed {
-        Some(c) => (c.state, c.stats, c.frame + 1),
+        Some(c) => {
+            shot.simulator
+                .restore_carried_contacts(&c.carried_contacts)?;
+            (c.state, c.stats, c.frame + 1)
+        }
         None => (State::at_rest(shot.simulator.model()), Vec::new(), 0),
     };
     fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -190,6 +194,7 @@ fn simulate(args: &Args) -> Result<PathBuf> {
                 fingerprint: scene.fingerprint,
                 frame,
                 state: state.clone(),
+                carried_contacts: shot.simulator.carried_contacts().to_vec(),
                 stats: stats.clone(),
             },
         )?;

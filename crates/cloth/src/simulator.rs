@@ -275,6 +275,31 @@ impl Simulator {
         Ok(())
     }
 
+    /// The only collision state carried from one step to the next: which vertices' body
+    /// contacts pulled them towards the body in the last substep (those are released in the
+    /// next). A checkpoint must keep it for a resumed run to compute the same bits.
+    #[must_use]
+    pub fn carried_contacts(&self) -> &[bool] {
+        self.collisions.pulling()
+    }
+
+    /// Restores [`Self::carried_contacts`] from a checkpoint.
+    ///
+    /// # Errors
+    /// [`ClothError::WrongLength`] when `flags` does not have one entry per vertex.
+    pub fn restore_carried_contacts(&mut self, flags: &[bool]) -> Result<(), ClothError> {
+        let expected = self.collisions.pulling().len();
+        if flags.len() != expected {
+            return Err(ClothError::WrongLength {
+                what: "carried contacts",
+                given: flags.len(),
+                expected,
+            });
+        }
+        self.collisions.set_pulling(flags);
+        Ok(())
+    }
+
     /// Moves the obstacle for the next frame: at `start` at time `t0`, at `end` at time `t1`
     /// (seconds), linearly in between, so each body vertex has the velocity
     /// (end − start)/(t1 − t0); before `t0` and after `t1` it holds still.

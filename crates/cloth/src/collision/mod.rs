@@ -121,6 +121,16 @@ impl Collisions {
         })
     }
 
+    /// Vertices whose contact pulled them towards the body in the last substep.
+    pub fn pulling(&self) -> &[bool] {
+        &self.pulling
+    }
+
+    /// Restores [`Self::pulling`] (from a checkpoint).
+    pub fn set_pulling(&mut self, flags: &[bool]) {
+        self.pulling.copy_from_slice(flags);
+    }
+
     /// Finds the body contacts for the substep of length `h` from time `t0`.
     pub fn before_solve(
         &mut self,
