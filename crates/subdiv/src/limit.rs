@@ -46,12 +46,17 @@ impl LimitMasks {
                 out
             })
             .collect();
-        let mut all = Self::default();
-        let tables = [&mut all.position, &mut all.tangent1, &mut all.tangent2];
-        for (k, table) in tables.into_iter().enumerate() {
-            *table = SparseRows::concat(parts.iter().map(|p| p[k].clone()).collect());
+        let (mut position, mut tangent1, mut tangent2) = (Vec::new(), Vec::new(), Vec::new());
+        for [p, t1, t2] in parts {
+            position.push(p);
+            tangent1.push(t1);
+            tangent2.push(t2);
         }
-        all
+        Self {
+            position: SparseRows::concat(position),
+            tangent1: SparseRows::concat(tangent1),
+            tangent2: SparseRows::concat(tangent2),
+        }
     }
 
     /// Limit positions and unit normals from the level's positions.

@@ -116,49 +116,22 @@ impl Refinement {
             return;
         }
         let (p, c, layout, options) = (parent_level, &self.child, self.layout, &self.options);
-        let np = p.vertex_count;
-        let (vertex_points, rest) = child.split_at_mut(layout.faces);
-        let (face_points, edge_points) = rest.split_at_mut(layout.edges - layout.faces);
-        face_points
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(k, out)| {
-                for (i, d) in out.iter_mut().enumerate() {
-                    let fv = p.face_verts.row(k * CHUNK + i);
-                    let w = 1.0 / fv.len() as f64;
-                    let mut acc = T::zero();
-                    for &v in fv {
-                        acc.add_scaled(&parent[v as usize], w);
-                    }
-                    *d = acc;
-                }
-            });
-        let face_points = &*face_points;
-        let face_point = |f: usize| to_u32(np + layout.faces + f);
-        let fill =
-            |out: &mut [T], row: &(dyn Fn(usize, &mut Scratch, &mut Gather<'_, T>) + Sync)| {
-                out.par_chunks_mut(CHUNK).enumerate().for_each_init(
-                    Scratch::default,
-                    |s, (k, out)| {
-                        for (i, d) in out.iter_mut().enumerate() {
-                            let mut g = Gather {
-                                parent,
-                                face_points,
-                                np,
-                                first_face: layout.faces,
-                                acc: T::zero(),
-                            };
-                            row(k * CHUNK + i, s, &mut g);
-                            *d = g.acc;
-                        }
-                    },
-                );
-            };
-        fill(vertex_points, &|v, s, g| {
-            vertex_row(p, c, options.crease_method, v, &face_point, s, g)
-        });
-        fill(edge_points, &|e, s, g| {
-            edge_row(p, c, layout, options, e, &face_point, s, g)
+        let face_point = |f: usize| to_u32(p.vertex_count + layout.faces + f);
+        let centroid = |f: usize| {
+            let fv = p.face_verts.row(f);
+            let w = 1.0 / fv.len() as f64;
+            let mut acc = T::zero();
+            for &v in fv {
+                acc.add_scaled(&parent[v as usize], w);
+            }
+            acc
+        };
+        two_phase(layout, parent, child, centroid, |i, s, g| {
+            if i < layout.faces {
+                vertex_row(p, c, options.crease_method, i, &face_point, s, g);
+            } else {
+                edge_row(p, c, layout, options, i - layout.edges, &face_point, s, g);
+            }
         });
     }
 }
@@ -197,35 +170,57 @@ pub(crate) fn apply_two_phase<T: Primvar>(
     parent: &[T],
     child: &mut [T],
 ) {
-    let np = parent.len();
+    two_phase(
+        layout,
+        parent,
+        child,
+        |f| w.gather(layout.faces + f, parent),
+        |i, _, g| {
+            let (cols, ws) = w.row(i);
+            for (&col, &wt) in cols.iter().zip(ws) {
+                g.push(col, wt);
+            }
+        },
+    );
+}
+
+/// The shared two-phase evaluation: every face point (`face_point(f)`), then every vertex and
+/// edge point in parallel, `row(child vertex, scratch, sink)` pushing its weights into a
+/// [`Gather`] that reads parent values and the fresh face points.
+fn two_phase<T: Primvar>(
+    layout: ChildLayout,
+    parent: &[T],
+    child: &mut [T],
+    face_point: impl Fn(usize) -> T + Sync,
+    row: impl Fn(usize, &mut Scratch, &mut Gather<'_, T>) + Sync,
+) {
     let (vertex_points, rest) = child.split_at_mut(layout.faces);
     let (face_points, edge_points) = rest.split_at_mut(layout.edges - layout.faces);
     face_points
         .par_chunks_mut(CHUNK)
         .enumerate()
-        .for_each(|(c, out)| {
-            for (k, d) in out.iter_mut().enumerate() {
-                *d = w.gather(layout.faces + c * CHUNK + k, parent);
+        .for_each(|(k, out)| {
+            for (i, d) in out.iter_mut().enumerate() {
+                *d = face_point(k * CHUNK + i);
             }
         });
     let face_points = &*face_points;
-    let fill = |first_row: usize, out: &mut [T]| {
-        out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
-            for (k, d) in out.iter_mut().enumerate() {
-                let (cols, ws) = w.row(first_row + c * CHUNK + k);
-                let mut acc = T::zero();
-                for (&col, &wt) in cols.iter().zip(ws) {
-                    let col = col as usize;
-                    let v = if col < np {
-                        &parent[col]
-                    } else {
-                        &face_points[col - np - layout.faces]
+    let fill = |first: usize, out: &mut [T]| {
+        out.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each_init(Scratch::default, |s, (k, out)| {
+                for (i, d) in out.iter_mut().enumerate() {
+                    let mut g = Gather {
+                        parent,
+                        face_points,
+                        np: parent.len(),
+                        first_face: layout.faces,
+                        acc: T::zero(),
                     };
-                    acc.add_scaled(v, wt);
+                    row(first + k * CHUNK + i, s, &mut g);
+                    *d = g.acc;
                 }
-                *d = acc;
-            }
-        });
+            });
     };
     fill(0, vertex_points);
     fill(layout.edges, edge_points);
