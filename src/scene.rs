@@ -81,6 +81,8 @@ struct ClothSection {
     thickness: f64,
     #[serde(default = "default_friction")]
     friction: f64,
+    #[serde(default = "default_strain_limit")]
+    strain_limit: f64,
     #[serde(default = "default_true")]
     self_collision: bool,
     #[serde(default)]
@@ -101,6 +103,10 @@ fn default_thickness() -> f64 {
 
 fn default_friction() -> f64 {
     0.3
+}
+
+fn default_strain_limit() -> f64 {
+    0.1
 }
 
 fn default_true() -> bool {
@@ -214,6 +220,8 @@ pub struct Cloth {
     pub thickness: f64,
     /// Coulomb friction coefficient against the body.
     pub friction: f64,
+    /// Largest stretch or squash of an edge, a fraction of its rest length (0: no limit).
+    pub strain_limit: f64,
     /// Whether the cloth collides with itself.
     pub self_collision: bool,
     /// Vertices fixed at their rest positions, ascending, without repeats.
@@ -377,6 +385,13 @@ fn cloth(c: &ClothSection, base: &Path, at: &dyn Fn(&str) -> String) -> Result<C
             c.friction
         );
     }
+    if !(0.0..1.0).contains(&c.strain_limit) {
+        bail!(
+            "{} = {}: must be at least 0 (no limit) and below 1",
+            at("[cloth] strain_limit"),
+            c.strain_limit
+        );
+    }
     let groups = Groups::new(&doc, &path);
     let pins = groups.select(&c.pins, &at("[cloth] pins"))?;
     let attach = groups.select(&c.attach, &at("[cloth] attach"))?;
@@ -409,6 +424,7 @@ fn cloth(c: &ClothSection, base: &Path, at: &dyn Fn(&str) -> String) -> Result<C
         material,
         thickness: c.thickness,
         friction: c.friction,
+        strain_limit: c.strain_limit,
         self_collision: c.self_collision,
         pins,
         attach,

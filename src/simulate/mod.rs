@@ -271,6 +271,7 @@ impl<'a> Shot<'a> {
             gravity: scene.gravity,
             thickness: c.thickness,
             friction: c.friction,
+            strain_limit: c.strain_limit,
             self_collision: c.self_collision,
             ..Settings::default()
         };
@@ -280,6 +281,9 @@ impl<'a> Shot<'a> {
             .with_context(in_cloth)?;
         let out = &scene.output;
         let cloth = Surface::new(&c.doc.mesh, out.level, out.limit_normals)?;
+        simulator
+            .set_collision_surface(cloth.stencils().clone())
+            .with_context(in_cloth)?;
         let body = match &scene.body {
             Some(b) => {
                 let surface = Surface::new(&b.rest, b.level, false)?;

@@ -58,6 +58,12 @@ impl Surface {
         })
     }
 
+    /// The stencils of the refined points over the control points.
+    #[must_use]
+    pub fn stencils(&self) -> &StencilTable {
+        &self.stencils
+    }
+
     /// The refined positions for control points `control`.
     #[must_use]
     pub fn refine(&self, control: &[Point]) -> Vec<Point> {

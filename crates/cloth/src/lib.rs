@@ -23,6 +23,10 @@
 //! the `thickness` (m), Coulomb `friction` and `self_collision`. Contacts become filter
 //! constraints of the implicit solve; continuous collision and a final projection are the
 //! fail-safes, so no vertex tunnels through the body or ends closer than half the thickness.
+//! Given the stencils of the subdivided surface ([`Simulator::set_collision_surface`]), the
+//! simulator also keeps every point of that surface, the one that renders, a full thickness
+//! from the body. After each solve, strain limiting (Provot 1995) keeps every edge within
+//! [`Settings::strain_limit`] of its rest length.
 #![warn(missing_docs)]
 
 mod assemble;
@@ -37,6 +41,7 @@ pub mod pcg;
 mod reduce;
 pub mod shapes;
 pub mod simulator;
+mod strain_limit;
 pub mod threads;
 
 pub use constraint::{Attachment, Contact, Motion};

@@ -24,14 +24,15 @@
 //! [`Settings::max_halvings`] levels, before [`ClothError::StepFailed`] is returned; the state
 //! is only written when a substep succeeds, so it never holds NaN.
 
-use tailor_subdiv::Point;
+use tailor_subdiv::{Point, StencilTable};
 
 use crate::assemble::{Assembly, Coefficients, Environment, Totals};
-use crate::collision::{Collisions, Obstacle};
+use crate::collision::{Collisions, Motion as Substep, Obstacle, Surface};
 use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
 use crate::energy::Vec3;
 use crate::pcg::Pcg;
 use crate::reduce::{partial_count, sum_by};
+use crate::strain_limit::StrainLimiter;
 use crate::{ClothError, Model, StepFailure};
 
 /// How the simulator steps.
@@ -56,12 +57,17 @@ pub struct Settings {
     /// Project element Hessians to PSD (turn off only to study the raw Jacobians).
     pub project_hessians: bool,
     /// Collision thickness, m: contacts hold the cloth this far from the obstacle, no vertex
-    /// ends closer than half of it, and cloth layers repel within it.
+    /// ends closer than half of it (no point of the refined surface closer than all of it,
+    /// with [`Simulator::set_collision_surface`]), and cloth layers repel within it.
     pub thickness: f64,
     /// Coulomb friction coefficient μ between cloth and obstacle.
     pub friction: f64,
     /// Whether the cloth collides with itself.
     pub self_collision: bool,
+    /// Strain limit: after each solve no edge stays stretched or squashed by more than this
+    /// fraction of its rest length (the `strain_limit` module, after Provot 1995); 0 turns it
+    /// off.
+    pub strain_limit: f64,
 }
 
 impl Default for Settings {
@@ -79,6 +85,7 @@ impl Default for Settings {
             thickness: 0.005,
             friction: 0.3,
             self_collision: false,
+            strain_limit: 0.1,
         }
     }
 }
@@ -125,6 +132,8 @@ pub struct StepReport {
     pub contacts: u32,
     /// Impacts and projections the collision fail-safes made over all substeps.
     pub impacts: u32,
+    /// Edge corrections strain limiting made over all substeps.
+    pub strain_corrections: u32,
 }
 
 /// Buffers of one substep.
@@ -138,6 +147,8 @@ struct Work {
     delta: Vec<Vec3>,
     rhs: Vec<Vec3>,
     filter: Filter,
+    /// 1 / mass, zero for a vertex whose position the constraints prescribe.
+    inverse_mass: Vec<f64>,
     partials: Vec<f64>,
 }
 
@@ -150,6 +161,7 @@ pub struct Simulator {
     assembly: Assembly,
     pcg: Pcg,
     collisions: Collisions,
+    strain_limiter: StrainLimiter,
     work: Work,
 }
 
@@ -180,6 +192,11 @@ impl Simulator {
             ),
             ("thickness", settings.thickness, settings.thickness > 0.0),
             ("friction", settings.friction, settings.friction >= 0.0),
+            (
+                "strain_limit",
+                settings.strain_limit,
+                (0.0..1.0).contains(&settings.strain_limit),
+            ),
             ("gravity", settings.gravity.norm(), true),
             ("wind", settings.wind.norm(), true),
         ];
@@ -191,6 +208,7 @@ impl Simulator {
         let n = model.vertex_count();
         Ok(Self {
             collisions: Collisions::new(&model)?,
+            strain_limiter: StrainLimiter::new(&model.springs, n),
             constraints: Constraints::new(n),
             assembly: Assembly::new(&model),
             pcg: Pcg::new(n),
@@ -203,6 +221,7 @@ impl Simulator {
                 delta: vec![Vec3::zeros(); n],
                 rhs: vec![Vec3::zeros(); n],
                 filter: Filter::new(n),
+                inverse_mass: vec![0.0; n],
                 partials: vec![0.0; partial_count(n)],
             },
             model,
@@ -272,6 +291,27 @@ impl Simulator {
         face_vertices: &[u32],
     ) -> Result<(), ClothError> {
         self.collisions.obstacle = Some(Obstacle::new(positions, face_offsets, face_vertices)?);
+        Ok(())
+    }
+
+    /// Makes the clearance from the obstacle hold for the refined surface `stencils` evaluates
+    /// (rows of weights over this garment's control points; typically
+    /// [`tailor_subdiv::Refiner::stencils`] of the level that is rendered), not only for the
+    /// control points: after the other collision passes of each substep the control points
+    /// are lifted until every refined point is at least the thickness from the obstacle.
+    ///
+    /// # Errors
+    /// [`ClothError::WrongLength`] when the table is not over this garment's control points.
+    pub fn set_collision_surface(&mut self, stencils: StencilTable) -> Result<(), ClothError> {
+        let expected = self.model.vertex_count();
+        if stencils.control_points != expected {
+            return Err(ClothError::WrongLength {
+                what: "collision surface stencils' control points",
+                given: stencils.control_points,
+                expected,
+            });
+        }
+        self.collisions.surface = Some(Surface::new(stencils));
         Ok(())
     }
 
@@ -508,6 +548,11 @@ impl Simulator {
             if w.filter.placed[i] {
                 w.x[i] = w.filter.goal[i];
             }
+            w.inverse_mass[i] = if w.filter.placed[i] {
+                0.0
+            } else {
+                1.0 / self.model.mass[i]
+            };
         }
         let finite = at.phi.is_finite()
             && w.x.iter().all(|p| p.iter().all(|c| c.is_finite()))
@@ -515,18 +560,26 @@ impl Simulator {
         if !finite {
             return Err(StepFailure::NonFinite);
         }
+        let mut motion = Substep {
+            h,
+            x0: &w.x0,
+            x: &mut w.x,
+            v: &mut w.trial,
+            inverse_mass: &w.inverse_mass,
+        };
+        // Friction first: strain limiting and the collision passes have the last word.
+        self.collisions
+            .friction(&self.settings, &w.rhs, &mut motion);
+        if self.settings.strain_limit > 0.0 {
+            report.strain_corrections += self.strain_limiter.limit(
+                &self.model.springs,
+                self.settings.strain_limit,
+                &mut motion,
+            );
+        }
         let impacts = self
             .collisions
-            .after_solve(
-                &self.settings,
-                &self.model.mass,
-                &w.filter.placed,
-                h,
-                &w.x0,
-                &mut w.x,
-                &mut w.trial,
-                &w.rhs,
-            )
+            .resolve(&self.settings, &mut motion)
             .map_err(|_| StepFailure::NonFinite)?;
         state.positions.copy_from_slice(&w.x);
         state.velocities.copy_from_slice(&w.trial);

@@ -12,9 +12,11 @@
 //!    approach that ends exactly at the thickness), the tangential velocity free. A vertex whose
 //!    contact pulled it towards the body in the last substep is released (Baraff & Witkin's
 //!    release rule).
-//! 2. **Friction, after the solve**. The constraint impulse j is what the solve's residual
-//!    leaves on a contact vertex (M Δv − h f); Coulomb friction removes up to μ jₙ / m of the
-//!    tangential velocity relative to the body (Bridson et al. §7.2).
+//! 2. **Friction, after the solve** ([`Collisions::friction`]). The constraint impulse j is
+//!    what the solve's residual leaves on a contact vertex (M Δv − h f); Coulomb friction
+//!    removes up to μ jₙ / m of the tangential velocity relative to the body (Bridson et al.
+//!    §7.2). The simulator then limits strain (`crate::strain_limit`), before the passes
+//!    below, so friction cannot hold an edge stretched and collisions have the last word.
 //! 3. **Self repulsion** ([`self_collision::repel`]): for every vertex within the thickness of
 //!    a face of the garment, an impulse that stops the pair approaching and starts separating
 //!    it by a tenth of the overlap per step (Bridson et al. §7.1).
@@ -28,6 +30,9 @@
 //!    [`Obstacle::project`]): any vertex whose path enters a body triangle from the front is put
 //!    back on that triangle's front at the end of the substep, however fast the body moved,
 //!    and any vertex closer than half the thickness is pushed out to it.
+//! 6. **The refined surface** ([`surface`]), when the caller gave its stencils: the control
+//!    points are lifted until every point of the subdivided surface, the one that renders,
+//!    is at least the thickness from the body.
 //!
 //! The body is one-sided: its faces' counter-clockwise normals point outwards (a closed
 //! character), so a vertex behind a face is inside and is pushed to the front. Impulses are
@@ -36,8 +41,10 @@
 
 mod obstacle;
 mod self_collision;
+mod surface;
 
 pub(crate) use obstacle::Obstacle;
+pub(crate) use surface::Surface;
 
 use tailor_collide::{CollideError, Hierarchy};
 use tailor_subdiv::Point;
@@ -51,13 +58,13 @@ use crate::{ClothError, Model, Settings};
 #[derive(Clone, Debug)]
 pub(crate) struct Collisions {
     pub obstacle: Option<Obstacle>,
+    /// The refined surface that must clear the obstacle, when the caller gave one.
+    pub surface: Option<Surface>,
     cloth: Hierarchy,
     /// The body contacts of the current substep.
     pub contacts: Vec<Contact>,
     /// Vertices whose contact pulled them towards the body in the last substep.
     pulling: Vec<bool>,
-    /// 1 / mass, zero for a vertex whose position is prescribed.
-    inverse_mass: Vec<f64>,
 }
 
 /// The moving garment of one substep: start positions, and end positions and velocities the
@@ -114,10 +121,10 @@ impl Collisions {
         let n = model.vertex_count();
         Ok(Self {
             obstacle: None,
+            surface: None,
             cloth: Hierarchy::build(&model.rest, &model.face_offsets, &model.face_vertices)?,
             contacts: Vec::new(),
             pulling: vec![false; n],
-            inverse_mass: vec![0.0; n],
         })
     }
 
@@ -148,50 +155,39 @@ impl Collisions {
         Ok(())
     }
 
-    /// Everything after the solve (steps 2–5 of the module docs) on the end positions `x` and
-    /// velocities `v`; `residual` is M (v₀ − v) + h f at the end, `placed` the vertices whose
-    /// positions the constraints prescribe. Returns how many impacts and projections it made.
-    #[allow(clippy::too_many_arguments)]
-    pub fn after_solve(
+    /// Coulomb friction on the body contacts (step 2 of the module docs); `residual` is
+    /// M (v₀ − v) + h f at the end of the solve.
+    pub fn friction(&mut self, settings: &Settings, residual: &[Vec3], motion: &mut Motion) {
+        if self.obstacle.is_some() {
+            obstacle::friction(
+                &self.contacts,
+                residual,
+                settings.friction,
+                motion,
+                &mut self.pulling,
+            );
+        }
+    }
+
+    /// The passes after friction (steps 3–5 of the module docs) on the end positions and
+    /// velocities. Returns how many impacts and projections they made.
+    pub fn resolve(
         &mut self,
         settings: &Settings,
-        mass: &[f64],
-        placed: &[bool],
-        h: f64,
-        x0: &[Point],
-        x: &mut [Point],
-        v: &mut [Vec3],
-        residual: &[Vec3],
+        motion: &mut Motion,
     ) -> Result<u32, CollideError> {
-        if self.obstacle.is_none() && !settings.self_collision {
-            return Ok(0);
-        }
-        for ((inverse, &m), &p) in self.inverse_mass.iter_mut().zip(mass).zip(placed) {
-            *inverse = if p { 0.0 } else { 1.0 / m };
-        }
-        let mut motion = Motion {
-            h,
-            x0,
-            x,
-            v,
-            inverse_mass: &self.inverse_mass,
-        };
-        obstacle::friction(
-            &self.contacts,
-            residual,
-            settings.friction,
-            &mut motion,
-            &mut self.pulling,
-        );
         let thickness = settings.thickness;
         let mut resolved = 0;
         if settings.self_collision {
-            self_collision::repel(&mut self.cloth, thickness, &mut motion)?;
-            resolved += self_collision::resolve_impacts(&mut self.cloth, thickness, &mut motion)?;
+            self_collision::repel(&mut self.cloth, thickness, motion)?;
+            resolved += self_collision::resolve_impacts(&mut self.cloth, thickness, motion)?;
         }
         if let Some(obstacle) = &mut self.obstacle {
-            resolved += obstacle.resolve_impacts(&mut self.cloth, thickness, &mut motion)?;
-            resolved += obstacle.project(thickness, &mut motion)?;
+            resolved += obstacle.resolve_impacts(&mut self.cloth, thickness, motion)?;
+            resolved += obstacle.project(thickness, motion)?;
+            if let Some(surface) = &mut self.surface {
+                resolved += obstacle.clear_surface(surface, thickness, motion)?;
+            }
         }
         Ok(resolved)
     }

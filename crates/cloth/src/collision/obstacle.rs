@@ -15,6 +15,7 @@ use tailor_collide::{Closest, CollideError, Hierarchy};
 use tailor_subdiv::Point;
 
 use super::Motion;
+use super::surface::Surface;
 use crate::constraint::Contact;
 use crate::energy::Vec3;
 use crate::{ClothError, Settings};
@@ -248,11 +249,23 @@ impl Obstacle {
         }
         Ok(moved)
     }
+
+    /// Lifts the garment until its refined `surface` clears the body by `thickness` at the
+    /// substep's end ([`super::surface`]); call after [`Self::project`], which refits the
+    /// hierarchy there. Returns how many control-point moves it made.
+    pub fn clear_surface(
+        &self,
+        surface: &mut Surface,
+        thickness: f64,
+        m: &mut Motion,
+    ) -> Result<u32, CollideError> {
+        surface.clear(&self.hierarchy, |c| self.velocity_at(c), thickness, m)
+    }
 }
 
 /// The unit direction away from the body at the closest point `c` to `q`, and the signed
 /// distance along it (negative behind the face, i.e. inside the body).
-fn away_from(q: Point, c: &Closest) -> (Vec3, f64) {
+pub(super) fn away_from(q: Point, c: &Closest) -> (Vec3, f64) {
     let offset = q - c.point;
     if offset.dot(&c.normal) > 0.0 && c.distance > 0.0 {
         (offset / c.distance, c.distance)
