@@ -53,6 +53,9 @@ use crate::constraint::Contact;
 use crate::energy::Vec3;
 use crate::{ClothError, Model, Settings};
 
+/// How much heavier a vertex resting on the body is in the self-collision passes.
+const HELD_MASS: f64 = 100.0;
+
 /// The collision state of one simulator: the garment's hierarchy, the obstacle, and the
 /// buffers of the current substep.
 #[derive(Clone, Debug)]
@@ -65,6 +68,8 @@ pub(crate) struct Collisions {
     pub contacts: Vec<Contact>,
     /// Vertices whose contact pulled them towards the body in the last substep.
     pulling: Vec<bool>,
+    /// The inverse masses of the self-collision passes: zero for vertices held by the body.
+    held: Vec<f64>,
 }
 
 /// The moving garment of one substep: start positions, and end positions and velocities the
@@ -125,6 +130,7 @@ impl Collisions {
             cloth: Hierarchy::build(&model.rest, &model.face_offsets, &model.face_vertices)?,
             contacts: Vec::new(),
             pulling: vec![false; n],
+            held: Vec::with_capacity(n),
         })
     }
 
@@ -179,8 +185,23 @@ impl Collisions {
         let thickness = settings.thickness;
         let mut resolved = 0;
         if settings.self_collision {
-            self_collision::repel(&mut self.cloth, thickness, motion)?;
-            resolved += self_collision::resolve_impacts(&mut self.cloth, thickness, motion)?;
+            // Cloth resting on the body is held by it: the layers above give way instead, so
+            // the self passes do not push it into the body for the body passes to push back
+            // out through the layer above.
+            self.held.clear();
+            self.held.extend_from_slice(motion.inverse_mass);
+            for c in &self.contacts {
+                self.held[c.vertex as usize] /= HELD_MASS;
+            }
+            let mut layers = Motion {
+                h: motion.h,
+                x0: motion.x0,
+                x: &mut *motion.x,
+                v: &mut *motion.v,
+                inverse_mass: &self.held,
+            };
+            self_collision::repel(&mut self.cloth, thickness, &mut layers)?;
+            resolved += self_collision::resolve_impacts(&mut self.cloth, thickness, &mut layers)?;
         }
         if let Some(obstacle) = &mut self.obstacle {
             resolved += obstacle.resolve_impacts(&mut self.cloth, thickness, motion)?;

@@ -150,8 +150,9 @@ pub(super) fn resolve_impacts(
 }
 
 /// Merges the vertices of every remaining impact into zones that move with their mean
-/// velocity (momentum kept), until no impact is left. A zone translates rigidly, so two of its
-/// features cannot meet during the substep if they did not touch at its start.
+/// velocity (momentum kept), or with the mean velocity of the vertices in them whose motion
+/// is prescribed (pins, attachments), until no impact is left. A zone translates rigidly, so
+/// two of its features cannot meet during the substep if they did not touch at its start.
 fn impact_zones(cloth: &mut Hierarchy, m: &mut Motion) -> Result<u32, CollideError> {
     let n = m.v.len();
     let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -183,19 +184,31 @@ fn impact_zones(cloth: &mut Hierarchy, m: &mut Motion) -> Result<u32, CollideErr
         if !changed {
             break;
         }
+        // A zone moves with the mean velocity of its movable vertices (momentum kept), or,
+        // when it holds vertices whose motion is prescribed, with theirs.
         let mut momentum = vec![(Vec3::zeros(), 0.0); n];
+        let mut held = vec![(Vec3::zeros(), 0u32); n];
         for k in 0..n {
+            let r = root(&mut parent, k as u32) as usize;
             let inverse = m.inverse_mass[k];
             if inverse > 0.0 {
-                let r = root(&mut parent, k as u32) as usize;
                 momentum[r].0 += m.v[k] / inverse;
                 momentum[r].1 += 1.0 / inverse;
+            } else {
+                held[r].0 += m.v[k];
+                held[r].1 += 1;
             }
         }
         for k in 0..n {
             if m.inverse_mass[k] > 0.0 {
-                let (p, mass) = momentum[root(&mut parent, k as u32) as usize];
-                m.v[k] = p / mass;
+                let r = root(&mut parent, k as u32) as usize;
+                let (p, mass) = momentum[r];
+                let (v, count) = held[r];
+                m.v[k] = if count > 0 {
+                    v / f64::from(count)
+                } else {
+                    p / mass
+                };
             }
         }
         m.sync_positions();
