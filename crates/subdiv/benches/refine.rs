@@ -1,15 +1,19 @@
 //! Subdivision benchmarks on square grids of 10k and 100k quads at levels 1 to 3:
-//! topology refinement (all levels' tables and weights), full refinement (topology plus
-//! positions), stencil table construction, and applying a stencil table to new positions
-//! (the per-frame cost of a cloth simulation). Throughput is in refined faces per second; the
+//! topology refinement (every level complete, and with the minimal last level that evaluation
+//! needs), refinement of positions (minimal topology plus positions), stencil table
+//! construction, and applying a stencil table to new positions (the per-frame cost of a cloth
+//! simulation). `compare-osd/` times the same cases against OpenSubdiv itself. Throughput is in refined faces per second; the
 //! allocation profiler's "max alloc" row is the peak memory a run holds.
 //!
 //! `cargo bench -p tailor-subdiv --bench refine` (set `RAYON_NUM_THREADS=1` for one thread).
 //! The 100k-quad level-3 cases need several GB and are skipped unless `TAILOR_BENCH_LARGE` is set.
 
+use common::grid;
 use divan::counter::ItemsCount;
 use divan::{AllocProfiler, Bencher, black_box};
 use tailor_subdiv::{Mesh, Point, Refiner};
+
+mod common;
 
 /// Reports allocations per benchmark, including the peak ("max alloc") held at once.
 #[global_allocator]
@@ -24,21 +28,6 @@ fn refined_faces(side: usize, level: usize) -> ItemsCount {
     ItemsCount::new(side * side * 4usize.pow(level as u32))
 }
 
-fn grid(n: usize) -> Mesh {
-    let mut positions = Vec::with_capacity((n + 1) * (n + 1));
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
-            positions.push(Point::new(x, y, 0.1 * (7.0 * x).sin() * (5.0 * y).cos()));
-        }
-    }
-    let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let faces: Vec<[u32; 4]> = (0..n)
-        .flat_map(|j| (0..n).map(move |i| [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]))
-        .collect();
-    Mesh::from_polygons(positions, &faces).expect("grid is valid")
-}
-
 /// (grid side, level): 100² = 10k quads and 316² ≈ 100k quads.
 fn cases() -> Vec<(usize, usize)> {
     let large = std::env::var_os("TAILOR_BENCH_LARGE").is_some();
@@ -48,26 +37,36 @@ fn cases() -> Vec<(usize, usize)> {
         .collect()
 }
 
-#[divan::bench(args = cases(), sample_count = 5)]
-fn topology(bencher: Bencher, &(side, level): &(usize, usize)) {
+/// Times `build` (a way of making a [`Refiner`]) on the grid.
+fn bench_topology(bencher: Bencher, side: usize, level: usize, build: fn(&Mesh, usize) -> Refiner) {
     let mesh = grid(side);
     bencher
         .counter(refined_faces(side, level))
-        .bench(|| black_box(Refiner::new(&mesh, level)));
+        .bench(|| black_box(build(&mesh, level)));
+}
+
+#[divan::bench(args = cases(), sample_count = 5)]
+fn topology(bencher: Bencher, &(side, level): &(usize, usize)) {
+    bench_topology(bencher, side, level, Refiner::new);
+}
+
+#[divan::bench(args = cases(), sample_count = 5)]
+fn topology_for_evaluation(bencher: Bencher, &(side, level): &(usize, usize)) {
+    bench_topology(bencher, side, level, Refiner::for_evaluation);
 }
 
 #[divan::bench(args = cases(), sample_count = 5)]
 fn topology_and_positions(bencher: Bencher, &(side, level): &(usize, usize)) {
     let mesh = grid(side);
     bencher.counter(refined_faces(side, level)).bench(|| {
-        let refiner = Refiner::new(&mesh, level);
+        let refiner = Refiner::for_evaluation(&mesh, level);
         black_box(refiner.refine(mesh.positions()))
     });
 }
 
 #[divan::bench(args = cases(), sample_count = 5)]
 fn stencil_build(bencher: Bencher, &(side, level): &(usize, usize)) {
-    let refiner = Refiner::new(&grid(side), level);
+    let refiner = Refiner::for_evaluation(&grid(side), level);
     bencher.bench(|| black_box(refiner.stencils()));
 }
 

@@ -25,8 +25,10 @@ pub mod sparse;
 pub mod stencil;
 pub mod topology;
 
-pub use mesh::{Corner, Crease, FaceVarying, Mesh, MeshError, Point, SHARPNESS_INFINITE, Uv};
+pub use mesh::{
+    Corner, Crease, FaceVarying, Mesh, MeshError, Point, SHARPNESS_INFINITE, Uv, Validation,
+};
 pub use options::{BoundaryInterpolation, CreaseMethod, FVarLinear, Options, TriangleRule};
 pub use refiner::{Limit, Refiner, subdivide};
-pub use sparse::{Primvar, SparseRows};
+pub use sparse::{Primvar, SharedRows, SparseRows};
 pub use stencil::StencilTable;

@@ -5,6 +5,12 @@
 //! [`Options`]. It is validated once when built, so every later stage can trust it: indices in
 //! range, faces with at least three distinct vertices, finite coordinates, non-negative
 //! sharpness. Everything is stored flat (CSR offsets) as the rest of the crate expects.
+//!
+//! Faces that use a vertex twice (`f 4 3 5 5`) are rejected by default: they are almost always
+//! a modelling mistake. OpenSubdiv accepts them (`Vtr::Level::completeTopologyFromFaceVertices`
+//! makes each repeated corner pair a *degenerate edge*, tagged non-manifold and so infinitely
+//! sharp), and four of its regression shapes rely on it; [`Validation::allow_degenerate_faces`]
+//! opts in to the same treatment (see [`crate::topology`]).
 
 use nalgebra::{Point3, Vector2};
 
@@ -69,6 +75,14 @@ pub enum MeshError {
     /// A face has fewer than three corners.
     #[error("face {face} has {corners} vertices; a face needs at least 3")]
     TooFewVertices {
+        /// 0-based face index.
+        face: usize,
+        /// How many it has.
+        corners: usize,
+    },
+    /// A face has more corners than local indices (`u16`, as in OpenSubdiv) can number.
+    #[error("face {face} has {corners} vertices; a face may have at most 65536")]
+    TooManyVertices {
         /// 0-based face index.
         face: usize,
         /// How many it has.
@@ -141,6 +155,15 @@ pub enum MeshError {
     },
 }
 
+/// What [`Mesh`] validation accepts beyond the strict rules.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Validation {
+    /// Accept faces that use a vertex more than once, as OpenSubdiv does: consecutive equal
+    /// corners form a degenerate edge, and every edge a face repeats is non-manifold (both
+    /// infinitely sharp). Off by default: such a face is [`MeshError::RepeatedVertex`].
+    pub allow_degenerate_faces: bool,
+}
+
 /// A validated Catmull-Clark control mesh.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mesh {
@@ -184,6 +207,24 @@ impl Mesh {
         face_offsets: Vec<u32>,
         face_vertices: Vec<u32>,
     ) -> Result<Self, MeshError> {
+        Self::from_flat_with(
+            positions,
+            face_offsets,
+            face_vertices,
+            Validation::default(),
+        )
+    }
+
+    /// As [`Self::from_flat`], accepting what `validation` allows.
+    ///
+    /// # Errors
+    /// Any [`MeshError`] about positions or faces that `validation` does not allow.
+    pub fn from_flat_with(
+        positions: Vec<Point>,
+        face_offsets: Vec<u32>,
+        face_vertices: Vec<u32>,
+        validation: Validation,
+    ) -> Result<Self, MeshError> {
         let mesh = Self {
             positions,
             face_offsets,
@@ -194,11 +235,11 @@ impl Mesh {
             holes: Vec::new(),
             options: Options::default(),
         };
-        mesh.validate_faces()?;
+        mesh.validate_faces(validation)?;
         Ok(mesh)
     }
 
-    fn validate_faces(&self) -> Result<(), MeshError> {
+    fn validate_faces(&self, validation: Validation) -> Result<(), MeshError> {
         if self.face_count() == 0 {
             return Err(MeshError::Empty);
         }
@@ -218,6 +259,12 @@ impl Mesh {
                     corners: fv.len(),
                 });
             }
+            if fv.len() > usize::from(u16::MAX) + 1 {
+                return Err(MeshError::TooManyVertices {
+                    face,
+                    corners: fv.len(),
+                });
+            }
             for (i, &v) in fv.iter().enumerate() {
                 if v as usize >= count {
                     return Err(MeshError::VertexOutOfRange {
@@ -226,7 +273,7 @@ impl Mesh {
                         count,
                     });
                 }
-                if fv[..i].contains(&v) {
+                if !validation.allow_degenerate_faces && fv[..i].contains(&v) {
                     return Err(MeshError::RepeatedVertex { face, vertex: v });
                 }
             }
@@ -449,6 +496,7 @@ fn check_sharpness(tag: &'static str, sharpness: f64) -> Result<(), MeshError> {
 }
 
 /// Converts a table size to the `u32` index type, which bounds meshes at 4 billion corners.
+#[inline]
 pub(crate) fn to_u32(n: usize) -> u32 {
     u32::try_from(n).expect("mesh larger than u32 indices allow")
 }
@@ -479,6 +527,10 @@ mod tests {
             Mesh::from_polygons(square(), &[[0u32, 1, 1]]).unwrap_err(),
             MeshError::RepeatedVertex { face: 0, vertex: 1 }
         );
+        let allow = Validation {
+            allow_degenerate_faces: true,
+        };
+        assert!(Mesh::from_flat_with(square(), vec![0, 4], vec![0, 1, 2, 2], allow).is_ok());
         assert_eq!(
             Mesh::from_polygons(square(), &[[0u32, 1, 4]]).unwrap_err(),
             MeshError::VertexOutOfRange {

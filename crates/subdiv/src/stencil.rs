@@ -6,19 +6,24 @@
 //! stencil is the weighted sum of its parents' stencils (and of the face points' just made),
 //! accumulated in a dense scratch row and emitted with columns in increasing order, so the result
 //! does not depend on the thread count.
+//!
+//! Rows keep their weight lists in a shared pool ([`SharedRows`]): stencils of regular regions
+//! repeat the same weights with other columns, so each distinct list is stored once (in chunks
+//! of rows built in parallel). A frame then reads columns and a small, cache-resident pool
+//! instead of a weight per entry, about half the bytes (`Far::StencilTable` stores every weight).
 
 use rayon::prelude::*;
 
 use crate::mesh::to_u32;
 use crate::refine::Refinement;
-use crate::sparse::{CHUNK, Primvar, SparseRows};
+use crate::sparse::{CHUNK, Primvar, SharedRows, SharedRowsBuilder, SparseRows};
 use crate::topology::Level;
 
 /// Rows of weights over the control points.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StencilTable {
     /// One row per output point.
-    pub rows: SparseRows,
+    pub rows: SharedRows,
     /// Number of control points the rows refer to.
     pub control_points: usize,
 }
@@ -27,13 +32,12 @@ impl StencilTable {
     /// The identity over `n` control points (level 0).
     #[must_use]
     pub fn identity(n: usize) -> Self {
-        let mut rows = SparseRows::new();
+        let mut rows = SharedRowsBuilder::default();
         for i in 0..n {
-            rows.push(to_u32(i), 1.0);
-            rows.end_row();
+            rows.push_row(&[to_u32(i)], &[1.0]);
         }
         Self {
-            rows,
+            rows: rows.finish(),
             control_points: n,
         }
     }
@@ -70,7 +74,7 @@ impl StencilTable {
         let face_rows = compose_rows(n, layout.faces..layout.edges, &|row, acc| {
             let (cols, ws) = weights.row(row);
             for (&c, &w) in cols.iter().zip(ws) {
-                acc.add_row(&self.rows, c as usize, w);
+                acc.add(self.rows.row(c as usize), w);
             }
         });
         let other = |range: std::ops::Range<usize>| {
@@ -79,18 +83,17 @@ impl StencilTable {
                 for (&c, &w) in cols.iter().zip(ws) {
                     let c = c as usize;
                     if c < np {
-                        acc.add_row(&self.rows, c, w);
+                        acc.add(self.rows.row(c), w);
                     } else {
-                        acc.add_row(&face_rows, c - np - layout.faces, w);
+                        acc.add(face_rows.row(c - np - layout.faces), w);
                     }
                 }
             })
         };
-        let mut rows = other(0..layout.faces);
-        rows.append(&face_rows);
-        rows.append(&other(layout.edges..step.child.vertex_count));
+        let vertex_rows = other(0..layout.faces);
+        let edge_rows = other(layout.edges..step.child.vertex_count);
         Self {
-            rows,
+            rows: SharedRows::concat(vec![vertex_rows, face_rows, edge_rows]),
             control_points: n,
         }
     }
@@ -101,7 +104,7 @@ impl StencilTable {
         let rows = compose_rows(self.control_points, 0..outer.rows(), &|row, acc| {
             let (cols, ws) = outer.row(row);
             for (&c, &w) in cols.iter().zip(ws) {
-                acc.add_row(&self.rows, c as usize, w);
+                acc.add(self.rows.row(c as usize), w);
             }
         });
         Self {
@@ -121,11 +124,12 @@ impl StencilTable {
 struct Accumulator {
     weights: Vec<f64>,
     touched: Vec<u32>,
+    row_weights: Vec<f64>,
 }
 
 impl Accumulator {
-    fn add_row(&mut self, table: &SparseRows, row: usize, w: f64) {
-        let (cols, ws) = table.row(row);
+    /// Adds `w` times a row (columns, weights).
+    fn add(&mut self, (cols, ws): (&[u32], &[f64]), w: f64) {
         for (&c, &x) in cols.iter().zip(ws) {
             let slot = &mut self.weights[c as usize];
             if *slot == 0.0 {
@@ -136,17 +140,23 @@ impl Accumulator {
         }
     }
 
-    fn emit(&mut self, out: &mut SparseRows) {
+    /// Writes the accumulated row, columns in increasing order and zero weights dropped, and
+    /// clears the accumulator.
+    fn emit(&mut self, out: &mut SharedRowsBuilder) {
         self.touched.sort_unstable();
         self.touched.dedup();
-        for &c in &self.touched {
-            let w = std::mem::take(&mut self.weights[c as usize]);
+        self.row_weights.clear();
+        let weights = &mut self.weights;
+        let row_weights = &mut self.row_weights;
+        self.touched.retain(|&c| {
+            let w = std::mem::take(&mut weights[c as usize]);
             if w != 0.0 {
-                out.push(c, w);
+                row_weights.push(w);
             }
-        }
+            w != 0.0
+        });
+        out.push_row(&self.touched, &self.row_weights);
         self.touched.clear();
-        out.end_row();
     }
 }
 
@@ -154,7 +164,7 @@ fn compose_rows(
     control_points: usize,
     range: std::ops::Range<usize>,
     row: &(dyn Fn(usize, &mut Accumulator) + Sync),
-) -> SparseRows {
+) -> SharedRows {
     let starts: Vec<usize> = range.clone().step_by(CHUNK).collect();
     let parts = starts
         .into_par_iter()
@@ -162,16 +172,17 @@ fn compose_rows(
             || Accumulator {
                 weights: vec![0.0; control_points],
                 touched: Vec::new(),
+                row_weights: Vec::new(),
             },
             |acc, start| {
-                let mut out = SparseRows::new();
+                let mut out = SharedRowsBuilder::default();
                 for r in start..(start + CHUNK).min(range.end) {
                     row(r, acc);
                     acc.emit(&mut out);
                 }
-                out
+                out.finish()
             },
         )
         .collect();
-    SparseRows::concat(parts)
+    SharedRows::concat(parts)
 }

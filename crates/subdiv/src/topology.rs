@@ -16,12 +16,32 @@
 //! boundary and non-manifold edges become infinitely sharp, as do non-manifold vertices except
 //! on an interior non-manifold crease, and topological corners with edge-and-corner boundaries.
 //! Child levels are built by [`crate::refine`].
+//!
+//! Degenerate faces (a vertex repeated, accepted only with
+//! [`Validation::allow_degenerate_faces`](crate::Validation)) are read as OpenSubdiv reads them
+//! (`Vtr::Level::completeTopologyFromFaceVertices`, `populateLocalIndices`): two equal
+//! consecutive corners make a new *degenerate edge* (both ends the same vertex) each time, and
+//! an edge a face uses twice gets a second instance; all are non-manifold, so infinitely sharp,
+//! and their vertices non-manifold corners. Such a vertex lists the face once per corner and a
+//! degenerate edge twice in a row, as its end 0 then its end 1 ([`Level::end_in_edge`]), which
+//! is how every child relation tells the two halves of a degenerate edge apart
+//! (`Vtr::QuadRefinement`). Child levels have no degenerate edges, only parallel ones.
+//!
+//! Local indices (a vertex's or edge's place in a face) are `u16`, as OpenSubdiv's
+//! `LocalIndex`: half the memory of the two largest per-incidence tables.
 
 use rayon::prelude::*;
 
 use crate::mesh::{Mesh, to_u32};
 use crate::options::BoundaryInterpolation;
 use crate::rules::crease::{self, INFINITE, Rule};
+
+/// A corner or edge position within a face as a local index (`u16`, as OpenSubdiv's
+/// `LocalIndex`); [`Mesh`] bounds face sizes accordingly.
+#[inline]
+pub(crate) fn to_local(n: usize) -> u16 {
+    u16::try_from(n).expect("face larger than Mesh allows")
+}
 
 /// A compressed sparse row table: row `i` is `items[offsets[i]..offsets[i + 1]]`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -35,18 +55,21 @@ pub struct Csr {
 impl Csr {
     /// Row `i`.
     #[must_use]
+    #[inline]
     pub fn row(&self, i: usize) -> &[u32] {
         &self.items[self.range(i)]
     }
 
     /// The item range of row `i`.
     #[must_use]
+    #[inline]
     pub fn range(&self, i: usize) -> std::ops::Range<usize> {
         self.offsets[i] as usize..self.offsets[i + 1] as usize
     }
 
     /// Number of rows.
     #[must_use]
+    #[inline]
     pub fn rows(&self) -> usize {
         self.offsets.len() - 1
     }
@@ -80,11 +103,11 @@ pub struct Level {
     /// Edge → incident faces.
     pub edge_faces: Csr,
     /// Position of the edge within each incident face, parallel to `edge_faces.items`.
-    pub edge_face_local: Vec<u32>,
+    pub edge_face_local: Vec<u16>,
     /// Vertex → incident faces (ordered around manifold vertices).
     pub vert_faces: Csr,
     /// Corner index of the vertex within each incident face, parallel to `vert_faces.items`.
-    pub vert_face_local: Vec<u32>,
+    pub vert_face_local: Vec<u16>,
     /// Vertex → incident edges (ordered around manifold vertices).
     pub vert_edges: Csr,
     /// Edge sharpness (0 smooth, ≥ 10 infinite).
@@ -104,24 +127,28 @@ pub struct Level {
 impl Level {
     /// Number of faces.
     #[must_use]
+    #[inline]
     pub fn face_count(&self) -> usize {
         self.face_verts.rows()
     }
 
     /// Number of edges.
     #[must_use]
+    #[inline]
     pub fn edge_count(&self) -> usize {
         self.edge_verts.len()
     }
 
     /// Edges with a single face.
     #[must_use]
+    #[inline]
     pub fn is_boundary_edge(&self, e: usize) -> bool {
         self.edge_faces.range(e).len() < 2
     }
 
     /// The vertex at the far end of edge `e` from `v`.
     #[must_use]
+    #[inline]
     pub fn other_end(&self, e: u32, v: u32) -> u32 {
         let [a, b] = self.edge_verts[e as usize];
         if a == v { b } else { a }
@@ -148,6 +175,10 @@ impl Level {
 
     /// Numbers the edges in order of first appearance and fills `face_edges`, flagging edges
     /// shared by more than two faces or by two faces of opposite winding as non-manifold.
+    ///
+    /// Degenerate faces follow `Vtr::Level::completeTopologyFromFaceVertices`: two equal
+    /// consecutive corners make a new degenerate edge each time, and an edge a face already
+    /// uses gets a second instance; both are non-manifold.
     fn build_edges(&mut self) {
         let nv = self.vertex_count;
         // Each vertex keeps the edges it starts (as the smaller index); at most two per corner.
@@ -158,35 +189,55 @@ impl Level {
         let mut slots = Csr::with_counts(corners);
         let mut fill = vec![0u32; nv];
         let mut edge_face_count: Vec<u32> = Vec::new();
+        let mut edge_last_face: Vec<u32> = Vec::new();
         self.face_edges = vec![0; self.face_verts.items.len()];
         for f in 0..self.face_count() {
             let range = self.face_verts.range(f);
             let fv = &self.face_verts.items[range.clone()];
+            let fi = to_u32(f);
             for j in 0..fv.len() {
                 let (a, b) = (fv[j], fv[(j + 1) % fv.len()]);
                 let (lo, hi) = (a.min(b), a.max(b));
                 let start = slots.offsets[lo as usize] as usize;
                 let known = &slots.items[start..start + fill[lo as usize] as usize];
-                let found = known.iter().copied().find(|&e| {
-                    let [p, q] = self.edge_verts[e as usize];
-                    p.max(q) == hi
+                let found = (a != b)
+                    .then(|| {
+                        known.iter().copied().find(|&e| {
+                            let [p, q] = self.edge_verts[e as usize];
+                            p.max(q) == hi
+                        })
+                    })
+                    .flatten();
+                let mut nonmanifold = a == b;
+                let existing = found.filter(|&e| {
+                    let ei = e as usize;
+                    if edge_last_face[ei] == fi {
+                        // The face repeats this edge: both instances are non-manifold.
+                        self.edge_nonmanifold[ei] = true;
+                        nonmanifold = true;
+                        return false;
+                    }
+                    if edge_face_count[ei] > 1 || self.edge_verts[ei][0] == a {
+                        self.edge_nonmanifold[ei] = true;
+                    }
+                    true
                 });
-                let e = match found {
+                let e = match existing {
                     Some(e) => {
-                        let ei = e as usize;
-                        if edge_face_count[ei] > 1 || self.edge_verts[ei][0] == a {
-                            self.edge_nonmanifold[ei] = true;
-                        }
-                        edge_face_count[ei] += 1;
+                        edge_face_count[e as usize] += 1;
+                        edge_last_face[e as usize] = fi;
                         e
                     }
                     None => {
                         let e = to_u32(self.edge_verts.len());
                         self.edge_verts.push([a, b]);
-                        self.edge_nonmanifold.push(false);
+                        self.edge_nonmanifold.push(nonmanifold);
                         edge_face_count.push(1);
-                        slots.items[start + fill[lo as usize] as usize] = e;
-                        fill[lo as usize] += 1;
+                        edge_last_face.push(fi);
+                        if a != b {
+                            slots.items[start + fill[lo as usize] as usize] = e;
+                            fill[lo as usize] += 1;
+                        }
                         e
                     }
                 };
@@ -226,12 +277,12 @@ impl Level {
                 let e = self.face_edges[corner] as usize;
                 let slot = ef_fill[e] as usize;
                 self.edge_faces.items[slot] = to_u32(f);
-                self.edge_face_local[slot] = to_u32(j);
+                self.edge_face_local[slot] = to_local(j);
                 ef_fill[e] += 1;
                 let v = self.face_verts.items[corner] as usize;
                 let slot = vf_fill[v] as usize;
                 self.vert_faces.items[slot] = to_u32(f);
-                self.vert_face_local[slot] = to_u32(j);
+                self.vert_face_local[slot] = to_local(j);
                 vf_fill[v] += 1;
             }
         }
@@ -275,9 +326,9 @@ impl Level {
     }
 
     /// The corner index of vertex `v` in face `f`.
-    fn corner_of(&self, f: usize, v: u32) -> u32 {
+    fn corner_of(&self, f: usize, v: u32) -> u16 {
         let fv = self.face_verts.row(f);
-        to_u32(fv.iter().position(|&x| x == v).expect("vertex not in face"))
+        to_local(fv.iter().position(|&x| x == v).expect("vertex not in face"))
     }
 
     fn order_vertex(&self, v: usize, faces: &mut Vec<u32>, edges: &mut Vec<u32>) -> bool {
@@ -421,14 +472,32 @@ impl Level {
             .collect();
     }
 
-    /// The edge joining `a` and `b`, if any.
+    /// The edge joining `a` and `b`, if any; for `a == b`, the first degenerate edge at `a`
+    /// (`Vtr::Level::findEdge`).
     #[must_use]
     pub fn find_edge(&self, a: u32, b: u32) -> Option<usize> {
         self.vert_edges
             .row(a as usize)
             .iter()
             .map(|&e| e as usize)
-            .find(|&e| self.edge_verts[e].contains(&b) && (a != b))
+            .find(|&e| {
+                let [p, q] = self.edge_verts[e];
+                if a == b { p == q } else { p == b || q == b }
+            })
+    }
+
+    /// Which end of its `i`-th incident edge (`vert_edges.row(v)[i]`) vertex `v` is: 0 or 1
+    /// (OpenSubdiv's vertex-edge local index). A degenerate edge, whose ends are both `v`, is
+    /// listed twice in a row: end 0, then end 1.
+    #[must_use]
+    #[inline]
+    pub fn end_in_edge(&self, v: u32, edges: &[u32], i: usize) -> usize {
+        let [a, b] = self.edge_verts[edges[i] as usize];
+        if a == b {
+            usize::from(i > 0 && edges[i - 1] == edges[i])
+        } else {
+            usize::from(a != v)
+        }
     }
 }
 
@@ -489,5 +558,35 @@ mod tests {
         assert!(level.vertex_nonmanifold[0]);
         assert_eq!(level.vertex_sharpness[0], INFINITE);
         assert_eq!(level.vertex_rule[0], Rule::Corner);
+    }
+
+    #[test]
+    fn repeated_corner_is_a_degenerate_nonmanifold_edge() {
+        // Two quads sharing edge 1-2; the first repeats vertex 2, as in
+        // `catmark_nonman_quadpole8` (`f 4 3 5 5`).
+        let p = (0..5).map(|i| Point::new(f64::from(i), 0.0, 0.0)).collect();
+        let faces = vec![0, 1, 2, 2, 1, 3, 4, 2];
+        let allow = crate::mesh::Validation {
+            allow_degenerate_faces: true,
+        };
+        let mesh = Mesh::from_flat_with(p, vec![0, 4, 8], faces, allow).unwrap();
+        let level = Level::from_mesh(&mesh);
+        assert_eq!(
+            level.edge_verts,
+            [[0, 1], [1, 2], [2, 2], [2, 0], [1, 3], [3, 4], [4, 2]]
+        );
+        assert!(level.edge_nonmanifold[2]);
+        assert_eq!(level.find_edge(2, 2), Some(2));
+        // Vertex 2 sees face 0 twice and the degenerate edge twice, as end 0 then end 1.
+        assert_eq!(level.vert_faces.row(2), [0, 0, 1]);
+        assert_eq!(level.vert_face_local[level.vert_faces.range(2)], [2, 3, 3]);
+        let edges = level.vert_edges.row(2);
+        assert_eq!(edges, [1, 2, 2, 3, 6]);
+        let ends: Vec<usize> = (0..edges.len())
+            .map(|i| level.end_in_edge(2, edges, i))
+            .collect();
+        assert_eq!(ends, [1, 0, 1, 0, 1]);
+        assert!(level.vertex_nonmanifold[2]);
+        assert_eq!(level.vertex_rule[2], Rule::Corner);
     }
 }

@@ -1,6 +1,7 @@
 //! Refinement results derived by hand from the Catmull-Clark rules, and invariants any correct
 //! implementation keeps: affine invariance (every stencil sums to one), stencils agreeing with
-//! level-by-level refinement, and results independent of the thread count.
+//! level-by-level refinement, results independent of the thread count, and the evaluation
+//! refiner (minimal last level) giving exactly what the full one gives.
 
 use nalgebra::Vector3;
 use tailor_subdiv::{Crease, Mesh, Point, Refiner, subdivide};
@@ -159,6 +160,35 @@ fn stencils_sum_to_one_and_agree_with_level_by_level_refinement() {
     for i in 0..stencils.len() {
         let (_, w) = stencils.rows.row(i);
         assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-13, "row {i}");
+    }
+}
+
+#[test]
+fn evaluation_refiner_gives_the_full_refiners_results() {
+    let mesh = bumpy_creased_cube();
+    for levels in 1..=3 {
+        let (full, eval) = (
+            Refiner::new(&mesh, levels),
+            Refiner::for_evaluation(&mesh, levels),
+        );
+        let points = full.refine(mesh.positions());
+        assert_eq!(points, eval.refine(mesh.positions()));
+        assert_eq!(full.stencils(), eval.stencils());
+        // The last level, completed on demand, is the one built up front.
+        let (a, b) = (full.last(), eval.last());
+        assert_eq!(a.face_verts, b.face_verts);
+        assert_eq!(a.face_edges, b.face_edges);
+        assert_eq!(a.edge_verts, b.edge_verts);
+        assert_eq!(a.edge_faces, b.edge_faces);
+        assert_eq!(a.vert_faces, b.vert_faces);
+        assert_eq!(a.vert_edges, b.vert_edges);
+        assert_eq!(a.vert_face_local, b.vert_face_local);
+        assert_eq!(a.edge_sharpness, b.edge_sharpness);
+        assert_eq!(a.vertex_rule, b.vertex_rule);
+        assert_eq!(
+            full.refined_mesh(points.clone(), None),
+            eval.refined_mesh(points, None)
+        );
     }
 }
 

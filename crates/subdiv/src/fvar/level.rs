@@ -213,8 +213,8 @@ impl FVarLevel {
                     }
                 }
             } else if !values.is_empty() {
-                for &e in edges {
-                    if fl.edge_discontinuous_at(l, e as usize, to_u32(v)) {
+                for (i, &e) in edges.iter().enumerate() {
+                    if fl.edge_discontinuous_at(l, e as usize, l.end_in_edge(to_u32(v), edges, i)) {
                         seam(&mut fl, e);
                     }
                 }
@@ -286,22 +286,28 @@ impl FVarLevel {
         }));
     }
 
-    /// Whether the faces of edge `e` disagree on the value at its end `v` (non-manifold case).
-    fn edge_discontinuous_at(&self, l: &Level, e: usize, v: u32) -> bool {
-        let faces = l.edge_faces.row(e);
+    /// Whether the faces of edge `e` disagree on the value at its end `end` (0 or 1) (non-manifold
+    /// case). The corner is found from the edge's place in each face, not by searching the face
+    /// for the vertex, which a degenerate face holds twice.
+    fn edge_discontinuous_at(&self, l: &Level, e: usize, end: usize) -> bool {
+        let faces = l.edge_faces.range(e);
         if faces.len() < 2 {
             return false;
         }
-        let value_in = |f: u32| {
-            let r = l.face_verts.range(f as usize);
-            let c = l.face_verts.items[r.clone()]
-                .iter()
-                .position(|&x| x == v)
-                .expect("edge end in face");
-            self.face_values[r.start + c]
+        let first_vertex = l.edge_verts[e][0];
+        let value_in = |k: usize| {
+            let r = l.face_verts.range(l.edge_faces.items[k] as usize);
+            let c = l.edge_face_local[k] as usize;
+            let reversed = usize::from(l.face_verts.items[r.start + c] != first_vertex);
+            let corner = if end == reversed {
+                c
+            } else {
+                next_corner(r.len(), c)
+            };
+            self.face_values[r.start + corner]
         };
-        let first = value_in(faces[0]);
-        faces[1..].iter().any(|&f| value_in(f) != first)
+        let first = value_in(faces.start);
+        faces.skip(1).any(|k| value_in(k) != first)
     }
 
     /// Tags the values of a mismatched vertex of the base level (second half of

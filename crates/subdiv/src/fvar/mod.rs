@@ -6,13 +6,13 @@
 //! own. OpenSubdiv (`Vtr::FVarLevel`, `Vtr::FVarRefinement`, `Far::PrimvarRefiner::
 //! InterpolateFaceVarying`; sources `opensubdiv/vtr/fvarLevel.cpp`, `fvarRefinement.cpp`,
 //! `far/primvarRefiner.h`) does it in three parts, mirrored here:
-//! - [`level`]: the base level's value topology: values per vertex ("siblings"), seams, which
+//! - `level`: the base level's value topology: values per vertex ("siblings"), seams, which
 //!   values no longer match their vertex's topology and how each is treated (corner, crease,
 //!   semi-sharp, dependent-sharp), as the interpolation mode dictates;
-//! - [`child`]: the child level's value topology, inherited from the parent's;
-//! - [`weights`]: the weight of every child value over the parent values, applied like a
+//! - `child`: the child level's value topology, inherited from the parent's;
+//! - `weights`: the weight of every child value over the parent values, applied like a
 //!   vertex refinement step;
-//! - [`limit`]: limit values of the last level.
+//! - `limit`: limit values of the last level.
 //!
 //! Where a value matches its vertex, it is refined with the vertex's own mask, so a mesh
 //! without seams in mode `None` refines UVs exactly as it refines positions. Values are numbered

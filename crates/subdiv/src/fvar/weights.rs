@@ -79,17 +79,19 @@ impl Step<'_> {
         to_u32(self.parent_fvar.value_count + self.layout().faces + f)
     }
 
-    /// Copies the vertex refinement's row `row`, mapping parent vertex `v`'s columns to values.
-    fn translate(&self, row: usize, value_of: &dyn Fn(u32) -> u32, out: &mut SparseRows) {
+    /// Copies the vertex refinement's row `row`, mapping the parent vertex at position `k` of
+    /// the row to `value_of(k)`. Positions, not vertex indices, identify the mask's points (as
+    /// `PrimvarRefiner` does), since a degenerate edge has the same vertex at both ends.
+    fn translate(&self, row: usize, value_of: &dyn Fn(usize) -> u32, out: &mut SparseRows) {
         let np = self.parent.vertex_count;
         let first_face = self.refinement.layout.faces;
         let (cols, ws) = self.refinement.weights(self.parent).row(row);
-        for (&col, &w) in cols.iter().zip(ws) {
+        for (k, (&col, &w)) in cols.iter().zip(ws).enumerate() {
             let col = col as usize;
             let mapped = if col >= np {
                 self.face_column(col - np - first_face)
             } else {
-                value_of(to_u32(col))
+                value_of(k)
             };
             out.push(mapped, w);
         }
@@ -105,9 +107,9 @@ impl Step<'_> {
             if self.mode.linear {
                 midpoint(ends, out);
             } else {
-                let a = p.edge_verts[e][0];
+                // The row starts with the two ends, in edge order.
                 let row = self.refinement.layout.edges + e;
-                self.translate(row, &|u| if u == a { ends[0] } else { ends[1] }, out);
+                self.translate(row, &|k| ends[k], out);
             }
             return;
         }
@@ -127,17 +129,15 @@ impl Step<'_> {
                 out.push(value, 1.0);
                 out.end_row();
             } else {
-                let vi = to_u32(v);
-                let edges = p.vert_edges.row(v);
-                let value_of = |u: u32| {
-                    if u == vi {
-                        return value;
+                // The row holds the face points, the far end of each edge, then the vertex.
+                let faces = p.vert_faces.range(v).len();
+                let edges = p.vert_edges.range(v).len();
+                let value_of = |k: usize| {
+                    if k == faces + edges {
+                        value
+                    } else {
+                        pf.vertex_edge_value(p, v, k - faces)
                     }
-                    let i = edges
-                        .iter()
-                        .position(|&e| p.other_end(e, vi) == u)
-                        .expect("mask column is a neighbour");
-                    pf.vertex_edge_value(p, v, i)
                 };
                 self.translate(v, &value_of, out);
             }

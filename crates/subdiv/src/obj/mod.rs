@@ -54,10 +54,11 @@
 //! edges, ...) are mapped back to the line of the face or tag that caused them; only an empty
 //! mesh has no line. The reader never panics.
 //!
-//! [`Mesh`] currently rejects every face with a repeated vertex, including the degenerate quads
-//! (`f 4 3 5 5`) OpenSubdiv accepts as non-manifold edges in four regression shapes
-//! (`catmark_nonman_edges`, `catmark_nonman_quadpole{8,64,360}`); those read as errors at the
-//! face's line until the mesh accepts them. The reader passes faces through unchanged.
+//! A face with a repeated vertex is an error at its line by default. OpenSubdiv accepts such
+//! degenerate faces (`f 4 3 5 5`, in four regression shapes: `catmark_nonman_edges`,
+//! `catmark_nonman_quadpole{8,64,360}`) as non-manifold edges; [`read_with`] and [`parse_with`]
+//! with [`Validation::allow_degenerate_faces`](crate::Validation) read them so (the conformance
+//! harness does). The reader passes faces through unchanged.
 //!
 //! # Writing
 //! [`write()`] prints every `f64` in a shortest form that parses back to the same bits (Rust's
@@ -74,7 +75,7 @@
 mod read;
 mod write;
 
-pub use read::{parse, read};
+pub use read::{parse, parse_with, read, read_with};
 pub use write::write;
 
 use crate::mesh::{Mesh, MeshError};

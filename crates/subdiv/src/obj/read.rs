@@ -8,7 +8,7 @@ use super::{
     BOUNDARY_CODES, CREASE_METHOD_NAMES, FVAR_CODES, Group, ObjDocument, ObjError, Problem,
     TRIANGLE_RULE_NAMES,
 };
-use crate::mesh::{Corner, Crease, FaceVarying, Mesh, MeshError, Point, Uv};
+use crate::mesh::{Corner, Crease, FaceVarying, Mesh, MeshError, Point, Uv, Validation};
 use crate::options::Options;
 
 /// Statements accepted and ignored.
@@ -37,9 +37,18 @@ const IGNORED: &[&str] = &[
 /// # Errors
 /// [`ObjError::Io`] if the file cannot be read, otherwise as [`parse`].
 pub fn read(path: &Path) -> Result<ObjDocument, ObjError> {
+    read_with(path, Validation::default())
+}
+
+/// As [`read`], validating the mesh with `validation` (for instance to accept OpenSubdiv's
+/// degenerate faces).
+///
+/// # Errors
+/// As [`read`], less what `validation` allows.
+pub fn read_with(path: &Path, validation: Validation) -> Result<ObjDocument, ObjError> {
     let file = path.display().to_string();
     match std::fs::read(path) {
-        Ok(bytes) => parse(&String::from_utf8_lossy(&bytes), &file),
+        Ok(bytes) => parse_with(&String::from_utf8_lossy(&bytes), &file, validation),
         Err(error) => Err(ObjError::Io { file, error }),
     }
 }
@@ -50,6 +59,18 @@ pub fn read(path: &Path) -> Result<ObjDocument, ObjError> {
 /// # Errors
 /// [`ObjError::At`] for a bad line (see [`Problem`]), [`ObjError::Mesh`] for a mesh without faces.
 pub fn parse(text: &str, source: &str) -> Result<ObjDocument, ObjError> {
+    parse_with(text, source, Validation::default())
+}
+
+/// As [`parse`], validating the mesh with `validation`.
+///
+/// # Errors
+/// As [`parse`], less what `validation` allows.
+pub fn parse_with(
+    text: &str,
+    source: &str,
+    validation: Validation,
+) -> Result<ObjDocument, ObjError> {
     let mut reader = Reader::new();
     let mut args = Vec::new();
     for (index, line) in text.lines().enumerate() {
@@ -68,7 +89,7 @@ pub fn parse(text: &str, source: &str) -> Result<ObjDocument, ObjError> {
                 problem,
             })?;
     }
-    reader.finish(source)
+    reader.finish(source, validation)
 }
 
 /// Everything read so far, with the line of every face and tag entry for error messages.
@@ -336,7 +357,7 @@ impl Reader {
     }
 
     /// Builds and validates the mesh, mapping a [`MeshError`] to the line at fault.
-    fn finish(mut self, source: &str) -> Result<ObjDocument, ObjError> {
+    fn finish(mut self, source: &str, validation: Validation) -> Result<ObjDocument, ObjError> {
         let fail = |reader: &Self, error: MeshError| match reader.line_of(&error) {
             Some(line) => ObjError::At {
                 file: source.to_owned(),
@@ -351,8 +372,8 @@ impl Reader {
         let positions = std::mem::take(&mut self.positions);
         let face_offsets = std::mem::take(&mut self.face_offsets);
         let face_vertices = std::mem::take(&mut self.face_vertices);
-        let mut mesh =
-            Mesh::from_flat(positions, face_offsets, face_vertices).map_err(|e| fail(&self, e))?;
+        let mut mesh = Mesh::from_flat_with(positions, face_offsets, face_vertices, validation)
+            .map_err(|e| fail(&self, e))?;
         if let Some((_, true)) = self.first_face {
             let uvs = FaceVarying {
                 values: std::mem::take(&mut self.uv_values),
@@ -387,6 +408,7 @@ impl Reader {
         let bad = |s: f64| s.is_nan() || s < 0.0;
         match *error {
             MeshError::TooFewVertices { face, .. }
+            | MeshError::TooManyVertices { face, .. }
             | MeshError::RepeatedVertex { face, .. }
             | MeshError::VertexOutOfRange { face, .. }
             | MeshError::UvOutOfRange { face, .. } => self.face_lines.get(face).copied(),

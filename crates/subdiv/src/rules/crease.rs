@@ -31,6 +31,7 @@ pub enum Rule {
 impl Rule {
     /// The rule implied by a vertex sharpness and a count of sharp incident edges.
     #[must_use]
+    #[inline]
     pub fn of(vertex_sharpness: f32, sharp_edges: usize) -> Self {
         if is_sharp(vertex_sharpness) {
             return Self::Corner;
@@ -54,6 +55,7 @@ impl Rule {
 
     /// Smooth and dart vertices use the smooth masks.
     #[must_use]
+    #[inline]
     pub fn is_smooth(self) -> bool {
         matches!(self, Self::Smooth | Self::Dart)
     }
@@ -61,24 +63,28 @@ impl Rule {
 
 /// Sharper than smooth (semi-sharp or infinite).
 #[must_use]
+#[inline]
 pub fn is_sharp(s: f32) -> bool {
     s > 0.0
 }
 
 /// Infinitely sharp.
 #[must_use]
+#[inline]
 pub fn is_infinite(s: f32) -> bool {
     s >= INFINITE
 }
 
 /// Semi-sharp: sharp but not infinitely.
 #[must_use]
+#[inline]
 pub fn is_semi_sharp(s: f32) -> bool {
     s > 0.0 && s < INFINITE
 }
 
 /// Uniform decay: semi-sharp values drop by one per level, clamped at smooth; infinite stays.
 #[must_use]
+#[inline]
 pub fn decrement(s: f32) -> f32 {
     if s <= 0.0 {
         0.0
