@@ -7,8 +7,6 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use image::RgbImage;
-
 /// A fresh directory for one test.
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("preview_cli_{name}"));
@@ -63,18 +61,46 @@ fn run_fails(args: &[&str], code: i32, message: &str) {
     assert!(stderr.contains(message), "{stderr:?} lacks {message:?}");
 }
 
-fn read_png(path: &Path) -> RgbImage {
-    image::open(path).unwrap().into_rgb8()
+/// The 8-bit RGB pixels of a PNG file, row-major.
+struct Sheet {
+    width: u32,
+    height: u32,
+    bytes: Vec<u8>,
+}
+
+impl Sheet {
+    fn dimensions(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    fn get_pixel(&self, x: u32, y: u32) -> [u8; 3] {
+        let i = 3 * (y * self.width + x) as usize;
+        [self.bytes[i], self.bytes[i + 1], self.bytes[i + 2]]
+    }
+}
+
+fn read_png(path: &Path) -> Sheet {
+    let file = std::io::BufReader::new(fs::File::open(path).unwrap());
+    let mut reader = png::Decoder::new(file).read_info().unwrap();
+    let mut bytes = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut bytes).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    bytes.truncate(info.buffer_size());
+    Sheet {
+        width: info.width,
+        height: info.height,
+        bytes,
+    }
 }
 
 /// Counts the pixels of the `i`-th 64 × 80 tile (4-pixel gaps) that are red (the cloth's
 /// outside) and grey (the body: equal channels, darker than the backdrop).
-fn tile_colours(sheet: &RgbImage, columns: u32, i: u32) -> (usize, usize) {
+fn tile_colours(sheet: &Sheet, columns: u32, i: u32) -> (usize, usize) {
     let (x0, y0) = (4 + (i % columns) * 68, 4 + (i / columns) * 84);
     let (mut red, mut grey) = (0, 0);
     for y in y0..y0 + 80 {
         for x in x0..x0 + 64 {
-            let [r, g, b] = sheet.get_pixel(x, y).0;
+            let [r, g, b] = sheet.get_pixel(x, y);
             if r > g.saturating_add(50) && r > b.saturating_add(50) {
                 red += 1;
             } else if r == g && g == b && r < 220 {

@@ -6,7 +6,8 @@
 //! so the picture does not jump between frames; [`shade`] computes normals and lights a point;
 //! [`raster`] fills triangles with edge functions and a z-buffer; [`render`] draws the cloth
 //! and the body of each frame into its own tile; [`sheet`] labels the tiles with the
-//! [`font`] and lays them out; [`gif`] animates them; [`frames`] finds and reads the files.
+//! [`font`] and lays them out in a [`picture`] (PNG through the `png` crate); [`gif`] animates
+//! them; [`frames`] finds and reads the files.
 //!
 //! **For the simulate command**: call [`render_sheet`] (or [`render::render_frames`] for the
 //! tiles, e.g. for [`gif::encode`]) with in-memory meshes and write the image with
@@ -18,6 +19,7 @@ pub mod camera;
 pub mod font;
 pub mod frames;
 pub mod gif;
+pub mod picture;
 pub mod raster;
 pub mod render;
 pub mod shade;
@@ -29,14 +31,12 @@ use std::str::FromStr;
 use std::time::Instant;
 
 use anyhow::Result;
-use image::RgbImage;
-use image::codecs::png::PngEncoder;
-use image::{ExtendedColorType, ImageEncoder};
 use nalgebra::Point3;
 
 use crate::output::write_atomically;
 use crate::polymesh_obj::PolyMesh;
 use frames::FrameList;
+use picture::Picture;
 
 /// A polygon mesh borrowed for drawing: positions and CSR faces, the layout of [`PolyMesh`]
 /// and `tailor_subdiv::Mesh`. Faces are counter-clockwise seen from outside.
@@ -115,7 +115,7 @@ impl Default for Options {
 /// # Panics
 /// When `frames` is empty or a face indexes past its mesh's positions.
 #[must_use]
-pub fn render_sheet(frames: &[FrameMeshes], options: &Options) -> RgbImage {
+pub fn render_sheet(frames: &[FrameMeshes], options: &Options) -> Picture {
     sheet::compose(&render::render_frames(frames, options))
 }
 
@@ -123,17 +123,8 @@ pub fn render_sheet(frames: &[FrameMeshes], options: &Options) -> RgbImage {
 ///
 /// # Errors
 /// When the file cannot be written.
-pub fn write_png(path: &Path, image: &RgbImage) -> Result<()> {
-    write_atomically(path, |out| {
-        PngEncoder::new(out)
-            .write_image(
-                image,
-                image.width(),
-                image.height(),
-                ExtendedColorType::Rgb8,
-            )
-            .map_err(std::io::Error::other)
-    })
+pub fn write_png(path: &Path, picture: &Picture) -> Result<()> {
+    write_atomically(path, |out| picture.write_png(out))
 }
 
 /// Largest tile side accepted by `--size` (it is rendered at twice that).

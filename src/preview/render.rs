@@ -6,10 +6,10 @@
 //! Tiles are independent, so they are rendered in parallel; each is drawn in a fixed order
 //! (cloth, then body, faces in file order), so the bytes do not depend on the thread count.
 
-use image::RgbImage;
 use rayon::prelude::*;
 
 use super::camera::Camera;
+use super::picture::Picture;
 use super::raster::{Rgb, Side, Surface};
 use super::shade::{self, Light, Material};
 use super::{FrameMeshes, MeshView, Options, Shading, sheet};
@@ -32,7 +32,7 @@ const CLOTH: Material = Material {
 /// Renders each frame as one `options.width × options.height` picture, all from one camera
 /// framing every vertex of every frame.
 #[must_use]
-pub fn render_frames(frames: &[FrameMeshes], options: &Options) -> Vec<RgbImage> {
+pub fn render_frames(frames: &[FrameMeshes], options: &Options) -> Vec<Picture> {
     let points: Vec<&[nalgebra::Point3<f64>]> = frames
         .iter()
         .flat_map(|f| f.body.iter().chain([&f.cloth]))
@@ -58,7 +58,7 @@ pub fn render_frames(frames: &[FrameMeshes], options: &Options) -> Vec<RgbImage>
                 draw(&mut surface, &camera, &light, body, &BODY, options.shading);
             }
             let pixels = surface.downsample(SUPERSAMPLE as usize);
-            let mut tile = RgbImage::from_raw(options.width, options.height, pixels)
+            let mut tile = Picture::from_bytes(options.width, options.height, pixels)
                 .expect("the downsampled surface has the tile's size");
             sheet::label(&mut tile, frame.frame);
             tile
@@ -138,10 +138,14 @@ mod tests {
                 body,
             };
             let tile = &render_frames(&[frame], &options)[0];
-            let covered = tile.pixels().filter(|p| p.0 != BACKGROUND).count() as f64;
+            let covered = tile
+                .bytes()
+                .chunks_exact(3)
+                .filter(|p| *p != BACKGROUND)
+                .count() as f64;
             assert!((covered - 92.0 * 92.0).abs() <= 4.0 * 92.0, "{covered}");
             // The cloth is drawn over a body in the same place: the centre is red.
-            let centre = tile.get_pixel(50, 50).0;
+            let centre = tile.get(50, 50);
             assert!(centre[0] > centre[1] + 50, "{centre:?}");
         }
     }

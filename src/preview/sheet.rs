@@ -1,9 +1,8 @@
 //! The contact sheet: frames laid out left to right, top to bottom, in a grid about as wide as
 //! it is tall, each labelled with its frame number in the built-in font.
 
-use image::{Rgb as Pixel, RgbImage};
-
 use super::font;
+use super::picture::Picture;
 use super::raster::Rgb;
 
 /// Pixels between tiles and around the sheet.
@@ -34,7 +33,7 @@ pub fn columns(count: usize, width: u32, height: u32) -> u32 {
 
 /// Writes `frame` in the tile's top-left corner, one font pixel to 1–3 pixels as the tile is
 /// under 240, under 360 or taller.
-pub fn label(tile: &mut RgbImage, frame: u32) {
+pub fn label(tile: &mut Picture, frame: u32) {
     let (x0, y0) = LABEL;
     let scale = (tile.height() / 120).clamp(1, 3);
     for (x, y) in font::pixels(frame) {
@@ -42,7 +41,7 @@ pub fn label(tile: &mut RgbImage, frame: u32) {
             for dx in 0..scale {
                 let (px, py) = (x0 + x as u32 * scale + dx, y0 + y as u32 * scale + dy);
                 if px < tile.width() && py < tile.height() {
-                    tile.put_pixel(px, py, Pixel(INK));
+                    tile.set(px, py, INK);
                 }
             }
         }
@@ -54,21 +53,15 @@ pub fn label(tile: &mut RgbImage, frame: u32) {
 /// # Panics
 /// When `tiles` is empty.
 #[must_use]
-pub fn compose(tiles: &[RgbImage]) -> RgbImage {
-    let (w, h) = tiles[0].dimensions();
+pub fn compose(tiles: &[Picture]) -> Picture {
+    let (w, h) = (tiles[0].width(), tiles[0].height());
     let cols = columns(tiles.len(), w, h);
     let rows = (tiles.len() as u32).div_ceil(cols);
-    let mut sheet = RgbImage::from_pixel(
-        cols * (w + GAP) + GAP,
-        rows * (h + GAP) + GAP,
-        Pixel(GAP_COLOUR),
-    );
+    let mut sheet = Picture::filled(cols * (w + GAP) + GAP, rows * (h + GAP) + GAP, GAP_COLOUR);
     for (i, tile) in tiles.iter().enumerate() {
         let (col, row) = (i as u32 % cols, i as u32 / cols);
         let (x, y) = (GAP + col * (w + GAP), GAP + row * (h + GAP));
-        for (tx, ty, p) in tile.enumerate_pixels() {
-            sheet.put_pixel(x + tx, y + ty, *p);
-        }
+        sheet.paste(tile, x, y);
     }
     sheet
 }
@@ -88,17 +81,12 @@ mod tests {
 
     #[test]
     fn compose_places_tiles_in_reading_order() {
-        let tiles: Vec<RgbImage> = (0..3u8)
-            .map(|i| RgbImage::from_pixel(2, 2, Pixel([i, i, i])))
-            .collect();
+        let tiles: Vec<Picture> = (0..3u8).map(|i| Picture::filled(2, 2, [i, i, i])).collect();
         let sheet = compose(&tiles);
-        assert_eq!(sheet.dimensions(), (2 * 6 + GAP, 2 * 6 + GAP));
-        assert_eq!(sheet.get_pixel(GAP, GAP), &Pixel([0, 0, 0]));
-        assert_eq!(sheet.get_pixel(2 * GAP + 2, GAP), &Pixel([1, 1, 1]));
-        assert_eq!(sheet.get_pixel(GAP, 2 * GAP + 2), &Pixel([2, 2, 2]));
-        assert_eq!(
-            sheet.get_pixel(2 * GAP + 2, 2 * GAP + 2),
-            &Pixel(GAP_COLOUR)
-        );
+        assert_eq!((sheet.width(), sheet.height()), (2 * 6 + GAP, 2 * 6 + GAP));
+        assert_eq!(sheet.get(GAP, GAP), [0, 0, 0]);
+        assert_eq!(sheet.get(2 * GAP + 2, GAP), [1, 1, 1]);
+        assert_eq!(sheet.get(GAP, 2 * GAP + 2), [2, 2, 2]);
+        assert_eq!(sheet.get(2 * GAP + 2, 2 * GAP + 2), GAP_COLOUR);
     }
 }
