@@ -5,7 +5,8 @@
 //!   tolerance; regenerate them only on purpose, with
 //!   `TAILOR_BLESS=1 cargo test --test simulate_cli`, and say why in the commit.
 //! - The bytes do not depend on the thread count.
-//! - A run stopped after a frame and resumed writes the same bytes as one uninterrupted run.
+//! - A run stopped after a frame, or killed midway, and resumed writes the same bytes as one
+//!   uninterrupted run.
 //! - Each bad input is refused before anything is written, with a message naming the file and
 //!   the key or line, and leaves an earlier run's output untouched.
 
@@ -256,6 +257,47 @@ fn stopped_and_resumed_run_writes_the_same_bytes() {
     let out = tailor(&[scene, "--out", parts_s, "--resume"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("another scene"));
+}
+
+#[test]
+fn killed_and_resumed_run_writes_the_same_bytes() {
+    // A longer shot, killed (SIGKILL, no chance to clean up) once frame 4 is on disk.
+    let dir = scratch("kill");
+    let scene = shot(&dir, &[("frames = 10", "frames = 40")]);
+    let scene = scene.to_str().unwrap();
+    let whole = dir.join("whole");
+    let killed = dir.join("killed");
+    let (whole_s, killed_s) = (whole.to_str().unwrap(), killed.to_str().unwrap());
+    run_ok(&[scene, "--out", whole_s, "--quiet"]);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tailor"))
+        .args(["simulate", scene, "--out", killed_s, "--quiet"])
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !killed.join("cloth_0004.obj").exists() {
+        assert!(started.elapsed().as_secs() < 300, "frame 4 never appeared");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(
+        !killed.join("summary.json").exists(),
+        "the run finished before it could be killed"
+    );
+    // Whatever the kill interrupted, no half-written file is left under a final name.
+    for (name, bytes) in objs(&killed) {
+        let text = String::from_utf8(bytes).unwrap();
+        assert!(text.ends_with('\n'), "{name} is cut short");
+    }
+    run_ok(&[scene, "--out", killed_s, "--resume", "--quiet"]);
+    let (a, b) = (objs(&whole), objs(&killed));
+    assert_eq!(a.len(), b.len());
+    for (name, bytes) in &a {
+        assert!(
+            bytes == &b[name],
+            "{name} differs after the kill and resume"
+        );
+    }
 }
 
 #[test]
