@@ -2,7 +2,8 @@
 //! topology refinement (every level complete, and with the minimal last level that evaluation
 //! needs), refinement of positions (minimal topology plus positions), stencil table
 //! construction, and applying a stencil table to new positions (the per-frame cost of a cloth
-//! simulation). `compare-osd/` times the same cases against OpenSubdiv itself. Throughput is in refined faces per second; the
+//! simulation) against the [`tailor_subdiv::Evaluator`] (regular faces as B-spline patches)
+//! that replaces it. `compare-osd/` times the same cases against OpenSubdiv itself. Throughput is in refined faces per second; the
 //! allocation profiler's "max alloc" row is the peak memory a run holds.
 //!
 //! `cargo bench -p tailor-subdiv --bench refine` (set `RAYON_NUM_THREADS=1` for one thread).
@@ -75,7 +76,25 @@ fn stencil_apply(bencher: Bencher, &(side, level): &(usize, usize)) {
     let mesh = grid(side);
     let stencils = Refiner::new(&mesh, level).stencils();
     let mut out = vec![Point::origin(); stencils.len()];
-    bencher.bench_local(|| stencils.apply(black_box(mesh.positions()), &mut out));
+    bencher
+        .counter(refined_faces(side, level))
+        .bench_local(|| stencils.apply(black_box(mesh.positions()), &mut out));
+}
+
+#[divan::bench(args = cases(), sample_count = 10)]
+fn evaluator_build(bencher: Bencher, &(side, level): &(usize, usize)) {
+    let refiner = Refiner::for_evaluation(&grid(side), level);
+    bencher.bench(|| black_box(refiner.evaluator()));
+}
+
+#[divan::bench(args = cases(), sample_count = 10)]
+fn evaluator_apply(bencher: Bencher, &(side, level): &(usize, usize)) {
+    let mesh = grid(side);
+    let evaluator = Refiner::for_evaluation(&mesh, level).evaluator();
+    let mut out = vec![Point::origin(); evaluator.len()];
+    bencher
+        .counter(refined_faces(side, level))
+        .bench_local(|| evaluator.apply(black_box(mesh.positions()), &mut out));
 }
 
 #[divan::bench(args = cases(), sample_count = 10)]

@@ -208,11 +208,15 @@ pub fn check_refined(shape: &Mesh, level: usize, reference: &Reference) -> Resul
     if !reference.uvs.is_empty() {
         check_uvs(&mesh, reference)?;
     }
-    let stencils = refiner.stencils();
-    let mut via_stencils = vec![crate::mesh::Point::origin(); stencils.len()];
-    stencils.apply(shape.positions(), &mut via_stencils);
-    let ours: Vec<[f64; 3]> = via_stencils.iter().map(|p| [p.x, p.y, p.z]).collect();
-    compare("stencil vertices", &ours, &reference.positions)
+    // The stencil table, then the evaluator built on it (regular faces as B-spline patches).
+    let evaluator = refiner.evaluator();
+    let mut out = vec![crate::mesh::Point::origin(); evaluator.len()];
+    evaluator.stencils().apply(shape.positions(), &mut out);
+    let ours: Vec<[f64; 3]> = out.iter().map(|p| [p.x, p.y, p.z]).collect();
+    compare("stencil vertices", &ours, &reference.positions)?;
+    evaluator.apply(shape.positions(), &mut out);
+    let ours: Vec<[f64; 3]> = out.iter().map(|p| [p.x, p.y, p.z]).collect();
+    compare("evaluator vertices", &ours, &reference.positions)
 }
 
 /// Checks limit positions and (where the reference has them) normals at level 1.

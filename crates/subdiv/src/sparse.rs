@@ -18,6 +18,11 @@ pub trait Primvar: Copy + Send + Sync {
     fn zero() -> Self;
     /// `self += w * other`.
     fn add_scaled(&mut self, other: &Self, w: f64);
+    /// The value's components (one for a scalar, two for a UV, three for a point), so that
+    /// kernels can work on plain arrays of them.
+    fn components(&self) -> &[f64];
+    /// The value's components, to write.
+    fn components_mut(&mut self) -> &mut [f64];
 }
 
 impl Primvar for f64 {
@@ -28,6 +33,14 @@ impl Primvar for f64 {
     #[inline]
     fn add_scaled(&mut self, other: &Self, w: f64) {
         *self += w * other;
+    }
+    #[inline]
+    fn components(&self) -> &[f64] {
+        std::slice::from_ref(self)
+    }
+    #[inline]
+    fn components_mut(&mut self) -> &mut [f64] {
+        std::slice::from_mut(self)
     }
 }
 
@@ -40,6 +53,14 @@ impl Primvar for Vector2<f64> {
     fn add_scaled(&mut self, other: &Self, w: f64) {
         self.x += w * other.x;
         self.y += w * other.y;
+    }
+    #[inline]
+    fn components(&self) -> &[f64] {
+        self.as_slice()
+    }
+    #[inline]
+    fn components_mut(&mut self) -> &mut [f64] {
+        self.as_mut_slice()
     }
 }
 
@@ -54,6 +75,14 @@ impl Primvar for Vector3<f64> {
         self.y += w * other.y;
         self.z += w * other.z;
     }
+    #[inline]
+    fn components(&self) -> &[f64] {
+        self.as_slice()
+    }
+    #[inline]
+    fn components_mut(&mut self) -> &mut [f64] {
+        self.as_mut_slice()
+    }
 }
 
 impl Primvar for Point3<f64> {
@@ -64,6 +93,14 @@ impl Primvar for Point3<f64> {
     #[inline]
     fn add_scaled(&mut self, other: &Self, w: f64) {
         self.coords.add_scaled(&other.coords, w);
+    }
+    #[inline]
+    fn components(&self) -> &[f64] {
+        self.coords.as_slice()
+    }
+    #[inline]
+    fn components_mut(&mut self) -> &mut [f64] {
+        self.coords.as_mut_slice()
     }
 }
 
@@ -191,7 +228,7 @@ impl SparseRows {
 
 /// `Σ w · src[col]` over one row.
 #[inline]
-fn weighted_sum<T: Primvar>((cols, weights): (&[u32], &[f64]), src: &[T]) -> T {
+pub(crate) fn weighted_sum<T: Primvar>((cols, weights): (&[u32], &[f64]), src: &[T]) -> T {
     let mut acc = T::zero();
     for (&c, &w) in cols.iter().zip(weights) {
         acc.add_scaled(&src[c as usize], w);
@@ -201,7 +238,7 @@ fn weighted_sum<T: Primvar>((cols, weights): (&[u32], &[f64]), src: &[T]) -> T {
 
 /// `dst[i] = Σ w · src[col]` over every row `i` (given by `row`) of a table, in parallel
 /// fixed-size chunks.
-fn apply_rows<'a, T: Primvar>(
+pub(crate) fn apply_rows<'a, T: Primvar>(
     rows: usize,
     row: impl Fn(usize) -> (&'a [u32], &'a [f64]) + Sync,
     src: &[T],

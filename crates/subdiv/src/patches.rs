@@ -1,0 +1,762 @@
+//! Regular patches of a control mesh, and where their refined points go (built once per
+//! topology, for [`crate::Evaluator`]).
+//!
+//! A control quad is *regular* when its four corners are interior, manifold, smooth vertices
+//! of valence four with four quads around them and no sharp edge or vertex: then its nine
+//! surrounding quads form a 4 × 4 grid of control points, and every refined point on the quad
+//! (interior, edges and corners) is the uniform bicubic B-spline subdivision of that grid
+//! (Stam 1998, §2; OpenSubdiv's `Far::PatchTable` builds the same `REGULAR` patches for limit
+//! evaluation). Catmull-Clark's rules need nothing beyond the quad's corners' one-rings to
+//! refine it: every point they touch is an edge or face point of those rings, or a vertex point
+//! of the corners, and a zero sharpness stays zero under either crease method. Holes do not
+//! change vertex masks, so they do not matter here.
+//!
+//! The refined points are numbered level by level in OpenSubdiv's order (vertex points, face
+//! points, edge points), which this module reads as a list of [`Segment`]s: runs of
+//! last-level vertices that hold one block per control vertex, face, face corner or edge, in
+//! that component's order. A regular face writes its interior points, and the points of the
+//! edges that first appear in it (level-0 edges are numbered by first appearance, so a run of
+//! faces owns a run of edges), into its blocks ([`Block`]): which grid point goes to which
+//! slot is read off the refined topology of one regular face, then checked on every other. So
+//! a run of faces writes disjoint, contiguous ranges of every segment, which is what lets
+//! [`crate::Evaluator`] fill the output in parallel without sharing a slot. Vertex points, and
+//! every point a regular face does not write, keep their stencil rows.
+
+use rayon::prelude::*;
+
+use crate::mesh::to_u32;
+use crate::rules::bspline;
+use crate::topology::{Csr, Level};
+
+/// Levels with patches: at level 1 a quad owns three points, too few to beat their stencil
+/// rows; above level 4 nobody refines a cloth mesh, and the kernels are specialised per level.
+pub(crate) const LEVELS: std::ops::RangeInclusive<usize> = 2..=4;
+
+/// The component a block of refined points belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Owner {
+    /// One block per control vertex.
+    Vertex,
+    /// One block per control face.
+    Face,
+    /// One block per face corner (a face of `n` corners has `n` blocks, consecutive).
+    Corner,
+    /// One block per control edge.
+    Edge,
+}
+
+/// A run of last-level vertices made of `unit` points per component of kind `owner`, in
+/// component order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Segment {
+    /// First last-level vertex of the run.
+    pub start: usize,
+    /// The components the blocks belong to.
+    pub owner: Owner,
+    /// Points per component.
+    pub unit: usize,
+}
+
+impl Segment {
+    /// The first vertex of component `index`'s block (for [`Owner::Corner`], `index` is the
+    /// face's first corner).
+    #[inline]
+    pub fn block(&self, index: usize) -> usize {
+        self.start + self.unit * index
+    }
+}
+
+/// The segments of `levels` uniform refinements of a mesh with `counts` = (vertices, faces,
+/// corners, edges), with the vertex count they add up to.
+///
+/// Level `k` appends face points (one per level-`k−1` face) and edge points (one per
+/// level-`k−1` edge); level-`k` edges are the interior edges of level-`k−1` faces, then the
+/// two halves of each level-`k−1` edge (`crate::refine`).
+fn segments(levels: usize, counts: [usize; 4]) -> (Vec<Segment>, usize) {
+    let mut kinds = vec![(Owner::Vertex, 1)];
+    let mut edges = vec![(Owner::Edge, 1)];
+    for k in 1..=levels {
+        // A level-0 face of n corners has n·4^(k−2) level-(k−1) faces, each with 4 edges.
+        kinds.push(if k == 1 {
+            (Owner::Face, 1)
+        } else {
+            (Owner::Corner, 1 << (2 * (k - 2)))
+        });
+        kinds.extend_from_slice(&edges);
+        let halves = edges.iter().map(|&(owner, unit)| (owner, 2 * unit));
+        edges = std::iter::once((Owner::Corner, 1 << (2 * (k - 1))))
+            .chain(halves)
+            .collect();
+    }
+    let mut start = 0;
+    let segments = kinds
+        .into_iter()
+        .map(|(owner, unit)| {
+            let s = Segment { start, owner, unit };
+            let count = match owner {
+                Owner::Vertex => counts[0],
+                Owner::Face => counts[1],
+                Owner::Corner => counts[2],
+                Owner::Edge => counts[3],
+            };
+            start += unit * count;
+            s
+        })
+        .collect();
+    (segments, start)
+}
+
+/// One point a regular face writes: `grid` (a position in its `S × S` grid of refined points,
+/// row-major, or for an edge the distance in steps from the edge's first vertex) goes to
+/// `offset` in its block of `segment`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Write {
+    /// Index into the segment list.
+    pub segment: u16,
+    /// Offset within the component's block.
+    pub offset: u32,
+    /// Where the value comes from.
+    pub grid: u16,
+}
+
+/// A component's block in one segment, as a patch writes it: slot `k` gets the grid point
+/// `slots.start + k` of the template.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct Block {
+    /// Index into the segment list.
+    pub segment: usize,
+    /// Where the block's slots are in the template.
+    pub slots: std::ops::Range<usize>,
+}
+
+/// A regular control face: its 4 × 4 control points and where its blocks start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Patch {
+    /// Control points, row-major: row `y` (across edge 0 is row 0), column `x` (across edge
+    /// 3 is column 0); the face's corners are (1, 1), (2, 1), (2, 2), (1, 2).
+    pub points: [u32; 16],
+    /// The face.
+    pub face: u32,
+    /// Its first corner.
+    pub corner: u32,
+    /// The first edge it owns (the first edge that first appears in it).
+    pub edge: u32,
+    /// Bit `j`: edge `j` first appears in this face, so this face writes its points.
+    pub owned: u8,
+    /// Bit `j`: edge `j` runs from corner `j + 1` to corner `j` (against the face).
+    pub flipped: u8,
+    /// The first three control columns are the previous patch's last three (it is the
+    /// neighbour across edge 3, the same way round, in the same run): the kernel reuses them.
+    pub follows: bool,
+}
+
+/// Where each face's and edge's components start, for a run of faces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Starts {
+    /// First face.
+    pub face: u32,
+    /// Its first corner.
+    pub corner: u32,
+    /// The first edge that first appears at or after it.
+    pub edge: u32,
+    /// First patch at or after it.
+    pub patch: u32,
+    /// First of its points in `irregular`.
+    pub irregular: u32,
+}
+
+impl Starts {
+    /// The component index of segment kind `owner` at this start.
+    #[inline]
+    pub fn index(&self, owner: Owner) -> usize {
+        match owner {
+            Owner::Vertex => 0,
+            Owner::Face => self.face as usize,
+            Owner::Corner => self.corner as usize,
+            Owner::Edge => self.edge as usize,
+        }
+    }
+}
+
+/// The regular patches of a mesh refined `levels` times and the layout of the refined points.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct RegularPatches {
+    /// Refinement level.
+    pub levels: usize,
+    /// `span_weights(levels)`: the 1D rule of the tensor product.
+    pub weights: Vec<[f64; 4]>,
+    /// The segments of the last level; the first is the control vertices' vertex points.
+    pub segments: Vec<Segment>,
+    /// A patch's blocks in the face and corner segments, in segment order.
+    pub face_blocks: Vec<Block>,
+    /// The grid point (x, y) of each slot of the face blocks.
+    pub face_points: Vec<[u8; 2]>,
+    /// The blocks of an edge a patch owns, in the edge segments.
+    pub edge_blocks: Vec<Block>,
+    /// The grid point of each slot of the edge blocks, for edge `j` of a patch running along
+    /// it (`[j][0]`) or against it (`[j][1]`).
+    pub edge_points: [[Vec<[u8; 2]>; 2]; 4],
+    /// Regular faces, in face order.
+    pub patches: Vec<Patch>,
+    /// Runs of faces evaluated as one task; one more than there are runs.
+    pub chunks: Vec<Starts>,
+    /// Last-level vertices in face and edge blocks that no patch writes, run by run, in
+    /// increasing order.
+    pub irregular: Vec<u32>,
+}
+
+/// Faces per task: about 4096 refined points.
+fn faces_per_chunk(levels: usize) -> usize {
+    (4096 >> (2 * levels)).max(16)
+}
+
+impl RegularPatches {
+    /// The regular patches of `base` refined `levels` times, `last_faces` being the last
+    /// level's face → vertices and `last_vertices` its vertex count. `None` when there are
+    /// none, or outside [`LEVELS`].
+    pub fn new(
+        base: &Level,
+        levels: usize,
+        last_faces: &Csr,
+        last_vertices: usize,
+    ) -> Option<Self> {
+        if !LEVELS.contains(&levels) {
+            return None;
+        }
+        let counts = [
+            base.vertex_count,
+            base.face_count(),
+            base.face_verts.items.len(),
+            base.edge_count(),
+        ];
+        let (segments, total) = segments(levels, counts);
+        assert_eq!(total, last_vertices, "refined vertex count");
+        let edge_start = edge_starts(base)?;
+        let regular = regular_vertices(base);
+        let grids = Grids {
+            base,
+            levels,
+            last_faces,
+        };
+        // Offsets are read off the first candidate, then every candidate is checked against
+        // them (and dropped if it differs, which would be a bug: tests count the patches).
+        let candidates: Vec<(usize, [u32; 16])> = (0..base.face_count())
+            .into_par_iter()
+            .filter_map(|f| control_points(base, &regular, f).map(|p| (f, p)))
+            .collect();
+        let &(first, _) = candidates.first()?;
+        let (face_writes, edge_writes) = grids.writes(first, &segments)?;
+        let side = (1 << levels) + 1;
+        let layout = Layout {
+            base,
+            segments: &segments,
+            face_writes: &face_writes,
+            edge_writes: &edge_writes,
+            edge_start: &edge_start,
+            side,
+        };
+        let mut patches: Vec<Patch> = candidates
+            .into_par_iter()
+            .filter_map(|(f, points)| {
+                let grid = grids.grid(f)?;
+                layout.patch(f, points, &grid)
+            })
+            .collect();
+        for i in 1..patches.len() {
+            let (before, after) = (patches[i - 1].points, patches[i].points);
+            patches[i].follows = (0..16).all(|k| k % 4 == 3 || after[k] == before[k + 1]);
+        }
+        let (face_blocks, face_points) = blocks(&face_writes, |g| xy(side, g));
+        let (edge_blocks, edge_steps) = blocks(&edge_writes, |t| t);
+        let edge_points = std::array::from_fn(|j| {
+            [false, true].map(|flipped| {
+                edge_steps
+                    .iter()
+                    .map(|&t| {
+                        let t = if flipped { side - 1 - t } else { t };
+                        xy(side, edge_grid(side, j, t))
+                    })
+                    .collect()
+            })
+        });
+        let mut this = Self {
+            levels,
+            weights: bspline::span_weights(levels),
+            segments,
+            face_blocks,
+            face_points,
+            edge_blocks,
+            edge_points,
+            patches,
+            chunks: Vec::new(),
+            irregular: Vec::new(),
+        };
+        this.chunks = this.chunk_starts(base, &edge_start);
+        for run in &this.chunks {
+            if let Some(p) = this.patches.get_mut(run.patch as usize) {
+                p.follows = false;
+            }
+        }
+        this.irregular = this.uncovered();
+        Some(this)
+    }
+
+    /// Where each run of faces starts (`irregular` left at zero until [`Self::uncovered`]).
+    fn chunk_starts(&self, base: &Level, edge_start: &[u32]) -> Vec<Starts> {
+        let faces = base.face_count();
+        let per = faces_per_chunk(self.levels);
+        let mut patch = 0;
+        (0..=faces.div_ceil(per))
+            .map(|c| {
+                let face = (c * per).min(faces);
+                while patch < self.patches.len() && (self.patches[patch].face as usize) < face {
+                    patch += 1;
+                }
+                Starts {
+                    face: to_u32(face),
+                    corner: base.face_verts.offsets[face],
+                    edge: edge_start[face],
+                    patch: to_u32(patch),
+                    irregular: 0,
+                }
+            })
+            .collect()
+    }
+
+    /// The face and edge blocks' points that no patch writes, run by run; fills in
+    /// `chunks[..].irregular`.
+    fn uncovered(&mut self) -> Vec<u32> {
+        let per_chunk: Vec<Vec<u32>> = (0..self.chunks.len() - 1)
+            .into_par_iter()
+            .map(|c| {
+                let (lo, hi) = (self.chunks[c], self.chunks[c + 1]);
+                let ranges: Vec<std::ops::Range<usize>> = self.segments[1..]
+                    .iter()
+                    .map(|s| s.block(lo.index(s.owner))..s.block(hi.index(s.owner)))
+                    .collect();
+                let mut bases = Vec::with_capacity(ranges.len());
+                let mut len = 0;
+                for r in &ranges {
+                    bases.push(len);
+                    len += r.len();
+                }
+                let mut covered = vec![false; len];
+                for p in &self.patches[lo.patch as usize..hi.patch as usize] {
+                    self.patch_blocks(&lo, p, |segment, start, grid| {
+                        let at = bases[segment] + start;
+                        for slot in &mut covered[at..at + grid.len()] {
+                            assert!(!*slot, "a refined point written twice");
+                            *slot = true;
+                        }
+                    });
+                }
+                ranges
+                    .iter()
+                    .zip(&bases)
+                    .flat_map(|(r, &b)| {
+                        let covered = &covered[b..b + r.len()];
+                        r.clone()
+                            .zip(covered)
+                            .filter(|&(_, &c)| !c)
+                            .map(|(i, _)| to_u32(i))
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut irregular = Vec::with_capacity(per_chunk.iter().map(Vec::len).sum());
+        for (c, points) in per_chunk.iter().enumerate() {
+            self.chunks[c].irregular = to_u32(irregular.len());
+            irregular.extend_from_slice(points);
+        }
+        if let Some(last) = self.chunks.last_mut() {
+            last.irregular = to_u32(irregular.len());
+        }
+        irregular
+    }
+
+    /// Every block patch `p` (of the run starting at `lo`) writes: `block(segment − 1, start
+    /// in the run's range of that segment, grid point (x, y) of each slot)`. Segment 0, the vertex
+    /// points, is never written by a patch.
+    #[inline]
+    pub fn patch_blocks(
+        &self,
+        lo: &Starts,
+        p: &Patch,
+        mut block: impl FnMut(usize, usize, &[[u8; 2]]),
+    ) {
+        let at = Starts {
+            face: p.face,
+            corner: p.corner,
+            edge: p.edge,
+            ..*lo
+        };
+        for b in &self.face_blocks {
+            let seg = &self.segments[b.segment];
+            let start = seg.unit * (at.index(seg.owner) - lo.index(seg.owner));
+            block(b.segment - 1, start, &self.face_points[b.slots.clone()]);
+        }
+        let mut edge = (p.edge - lo.edge) as usize;
+        for (j, points) in self.edge_points.iter().enumerate() {
+            if p.owned & (1 << j) == 0 {
+                continue;
+            }
+            let points = &points[usize::from(p.flipped & (1 << j) != 0)];
+            for b in &self.edge_blocks {
+                let unit = self.segments[b.segment].unit;
+                block(b.segment - 1, unit * edge, &points[b.slots.clone()]);
+            }
+            edge += 1;
+        }
+    }
+
+    /// Memory held, in bytes.
+    pub fn bytes(&self) -> usize {
+        self.patches.len() * size_of::<Patch>()
+            + self.chunks.len() * size_of::<Starts>()
+            + self.irregular.len() * 4
+            + (self.face_points.len() + 8 * self.edge_points[0][0].len()) * 2
+    }
+}
+
+/// The grid position (row-major, side `s`) of the point `t` steps along edge `j` from
+/// corner `j`.
+#[inline]
+pub(crate) fn edge_grid(s: usize, j: usize, t: usize) -> usize {
+    let (x, y) = match j {
+        0 => (t, 0),
+        1 => (s - 1, t),
+        2 => (s - 1 - t, s - 1),
+        _ => (0, s - 1 - t),
+    };
+    y * s + x
+}
+
+/// Grid point `row_major` (side `s`) as (x, y).
+fn xy(s: usize, row_major: usize) -> [u8; 2] {
+    [row_major % s, row_major / s].map(|c| u8::try_from(c).expect("small grid"))
+}
+
+/// Groups writes into blocks, one per segment in segment order, with the slots' values
+/// (`value` of each write's grid field) in offset order. The writes cover each block's slots
+/// exactly once ([`Grids::writes`] checks it).
+fn blocks<V>(writes: &[Write], value: impl Fn(usize) -> V) -> (Vec<Block>, Vec<V>) {
+    let mut sorted = writes.to_vec();
+    sorted.sort_unstable_by_key(|w| (w.segment, w.offset));
+    let mut blocks: Vec<Block> = Vec::new();
+    for (k, w) in sorted.iter().enumerate() {
+        match blocks.last_mut() {
+            Some(b) if b.segment == usize::from(w.segment) => b.slots.end = k + 1,
+            _ => blocks.push(Block {
+                segment: usize::from(w.segment),
+                slots: k..k + 1,
+            }),
+        }
+    }
+    let values = sorted.iter().map(|w| value(w.grid as usize)).collect();
+    (blocks, values)
+}
+
+/// For each face, the first edge that first appears in it or later (level-0 edges are
+/// numbered by first appearance walking the faces); `None` if the numbering is otherwise.
+fn edge_starts(base: &Level) -> Option<Vec<u32>> {
+    let mut starts = vec![0u32; base.face_count() + 1];
+    let mut last = 0;
+    for e in 0..base.edge_count() {
+        let first = *base.edge_faces.row(e).iter().min()? as usize;
+        if first < last {
+            return None;
+        }
+        last = first;
+        starts[first + 1] += 1;
+    }
+    for f in 0..base.face_count() {
+        starts[f + 1] += starts[f];
+    }
+    Some(starts)
+}
+
+/// Interior, manifold, smooth vertices of valence four whose four faces are quads and whose
+/// edges and self are not sharp: the vertices around which Catmull-Clark is the B-spline rule.
+fn regular_vertices(base: &Level) -> Vec<bool> {
+    (0..base.vertex_count)
+        .into_par_iter()
+        .map(|v| {
+            let faces = base.vert_faces.row(v);
+            let edges = base.vert_edges.row(v);
+            faces.len() == 4
+                && edges.len() == 4
+                && !base.vertex_nonmanifold[v]
+                && base.vertex_sharpness[v] == 0.0
+                && faces
+                    .iter()
+                    .all(|&f| base.face_verts.range(f as usize).len() == 4)
+                && edges.iter().all(|&e| {
+                    let e = e as usize;
+                    base.edge_sharpness[e] == 0.0
+                        && !base.edge_nonmanifold[e]
+                        && base.edge_faces.range(e).len() == 2
+                })
+        })
+        .collect()
+}
+
+/// The face across edge `j` of face `f`, and that edge's place in it.
+fn across(base: &Level, f: usize, j: usize) -> Option<(usize, usize)> {
+    let e = base.face_edges[base.face_verts.offsets[f] as usize + j] as usize;
+    let range = base.edge_faces.range(e);
+    if range.len() != 2 {
+        return None;
+    }
+    range
+        .map(|i| {
+            let g = base.edge_faces.items[i] as usize;
+            (g, usize::from(base.edge_face_local[i]))
+        })
+        .find(|&(g, _)| g != f)
+}
+
+/// The 4 × 4 control points of face `f` if it is a regular quad, row-major as in
+/// [`Patch::points`].
+fn control_points(base: &Level, regular: &[bool], f: usize) -> Option<[u32; 16]> {
+    let fv = base.face_verts.row(f);
+    if fv.len() != 4 || !fv.iter().all(|&v| regular[v as usize]) {
+        return None;
+    }
+    if (0..4).any(|i| fv[(i + 1)..].contains(&fv[i])) {
+        return None;
+    }
+    // Corner j sits at CORNER[j]; edge j runs along DIR[j]; its far side is OUT[j].
+    const CORNER: [(i32, i32); 4] = [(1, 1), (2, 1), (2, 2), (1, 2)];
+    const DIR: [(i32, i32); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
+    const OUT: [(i32, i32); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
+    let mut points = [u32::MAX; 16];
+    let mut put = |(x, y): (i32, i32), v: u32| points[(y * 4 + x) as usize] = v;
+    let add = |a: (i32, i32), b: (i32, i32)| (a.0 + b.0, a.1 + b.1);
+    let sub = |a: (i32, i32), b: (i32, i32)| (a.0 - b.0, a.1 - b.1);
+    for j in 0..4 {
+        put(CORNER[j], fv[j]);
+        // Across edge j (corner j → j+1), the neighbour runs j+1 → j, then on to the points
+        // beyond corner j and corner j+1.
+        let (g, m) = across(base, f, j)?;
+        let gv = base.face_verts.row(g);
+        if gv.len() != 4 {
+            return None;
+        }
+        put(add(CORNER[j], OUT[j]), gv[(m + 2) % 4]);
+        put(add(CORNER[(j + 1) % 4], OUT[j]), gv[(m + 3) % 4]);
+        // Across the neighbour's next edge (corner j → beyond it) lies the diagonal quad.
+        let (h, q) = across(base, g, (m + 1) % 4)?;
+        let hv = base.face_verts.row(h);
+        if hv.len() != 4 {
+            return None;
+        }
+        put(sub(add(CORNER[j], OUT[j]), DIR[j]), hv[(q + 3) % 4]);
+    }
+    Some(points)
+}
+
+/// Reads a regular face's refined points off the last level's faces.
+struct Grids<'a> {
+    base: &'a Level,
+    levels: usize,
+    last_faces: &'a Csr,
+}
+
+impl Grids<'_> {
+    /// The last-level vertex at each point of face `f`'s `S × S` grid (row-major, corner 0 at
+    /// the origin, edge 0 along the first row). The `4^levels` last-level faces of a level-0
+    /// quad are consecutive, child `j` of a quad sits at its corner `j` with the same
+    /// orientation (`crate::refine`), so a face's index spells its cell in base 4.
+    fn grid(&self, f: usize) -> Option<Vec<u32>> {
+        const OFFSET: [(usize, usize); 4] = [(0, 0), (1, 0), (1, 1), (0, 1)];
+        let n = self.levels;
+        let s = (1 << n) + 1;
+        let first = (self.base.face_verts.offsets[f] as usize) << (2 * (n - 1));
+        let mut grid = vec![u32::MAX; s * s];
+        for leaf in 0..1usize << (2 * n) {
+            let (mut x, mut y) = (0, 0);
+            for k in 0..n {
+                let digit = (leaf >> (2 * (n - 1 - k))) & 3;
+                x += OFFSET[digit].0 << (n - 1 - k);
+                y += OFFSET[digit].1 << (n - 1 - k);
+            }
+            let verts = self.last_faces.row(first + leaf);
+            for (c, &(dx, dy)) in OFFSET.iter().enumerate() {
+                let slot = &mut grid[(y + dy) * s + x + dx];
+                if *slot != u32::MAX && *slot != verts[c] {
+                    return None;
+                }
+                *slot = verts[c];
+            }
+        }
+        Some(grid)
+    }
+
+    /// The face and edge writes, read off regular face `f`.
+    fn writes(&self, f: usize, segments: &[Segment]) -> Option<(Vec<Write>, Vec<Write>)> {
+        let grid = self.grid(f)?;
+        let base = self.base;
+        let s = (1 << self.levels) + 1;
+        let corner = base.face_verts.offsets[f] as usize;
+        let find = |vertex: u32| {
+            let i = segments.partition_point(|seg| seg.start <= vertex as usize) - 1;
+            let seg = &segments[i];
+            (i, seg, vertex as usize - seg.start)
+        };
+        let mut face_writes = Vec::new();
+        for y in 1..s - 1 {
+            for x in 1..s - 1 {
+                let (i, seg, at) = find(grid[y * s + x]);
+                let index = match seg.owner {
+                    Owner::Face => f,
+                    Owner::Corner => corner,
+                    Owner::Vertex | Owner::Edge => return None,
+                };
+                let offset = at.checked_sub(seg.unit * index)?;
+                let len = if seg.owner == Owner::Face { 1 } else { 4 };
+                if offset >= seg.unit * len {
+                    return None;
+                }
+                face_writes.push(write(i, offset, y * s + x));
+            }
+        }
+        let e = base.face_edges[corner] as usize;
+        let forward = base.edge_verts[e][0] == base.face_verts.items[corner];
+        let mut edge_writes = Vec::new();
+        for t in 1..s - 1 {
+            let (i, seg, at) = find(grid[edge_grid(s, 0, t)]);
+            if seg.owner != Owner::Edge {
+                return None;
+            }
+            let offset = at.checked_sub(seg.unit * e)?;
+            if offset >= seg.unit {
+                return None;
+            }
+            edge_writes.push(write(i, offset, if forward { t } else { s - 1 - t }));
+        }
+        // Every slot of a quad's blocks and of an edge's blocks, once.
+        let slots = |owners: &[Owner], len: usize| -> usize {
+            segments
+                .iter()
+                .filter(|seg| owners.contains(&seg.owner))
+                .map(|seg| seg.unit * if seg.owner == Owner::Corner { len } else { 1 })
+                .sum()
+        };
+        let distinct = |w: &[Write]| {
+            let mut keys: Vec<(u16, u32)> = w.iter().map(|w| (w.segment, w.offset)).collect();
+            keys.sort_unstable();
+            keys.dedup();
+            keys.len() == w.len()
+        };
+        let complete = slots(&[Owner::Face, Owner::Corner], 4) == face_writes.len()
+            && slots(&[Owner::Edge], 1) == edge_writes.len()
+            && distinct(&face_writes)
+            && distinct(&edge_writes);
+        complete.then_some((face_writes, edge_writes))
+    }
+}
+
+fn write(segment: usize, offset: usize, grid: usize) -> Write {
+    Write {
+        segment: u16::try_from(segment).expect("few segments"),
+        offset: to_u32(offset),
+        grid: u16::try_from(grid).expect("small grid"),
+    }
+}
+
+/// Checks a candidate face's refined topology against the writes and makes its patch.
+struct Layout<'a> {
+    base: &'a Level,
+    segments: &'a [Segment],
+    face_writes: &'a [Write],
+    edge_writes: &'a [Write],
+    edge_start: &'a [u32],
+    side: usize,
+}
+
+impl Layout<'_> {
+    fn patch(&self, f: usize, points: [u32; 16], grid: &[u32]) -> Option<Patch> {
+        let base = self.base;
+        let s = self.side;
+        let range = base.face_verts.range(f);
+        let (fv, fe) = (
+            &base.face_verts.items[range.clone()],
+            &base.face_edges[range],
+        );
+        let corner = base.face_verts.offsets[f] as usize;
+        let index = |seg: &Segment| match seg.owner {
+            Owner::Face => f,
+            _ => corner,
+        };
+        let faces_ok = self.face_writes.iter().all(|w| {
+            let seg = &self.segments[w.segment as usize];
+            grid[w.grid as usize] as usize == seg.block(index(seg)) + w.offset as usize
+        });
+        let corners_ok = (0..4).all(|j| grid[edge_grid(s, j, 0)] == fv[j]);
+        let (mut owned, mut flipped, mut rank) = (0u8, 0u8, 0);
+        for j in 0..4 {
+            let e = fe[j] as usize;
+            let forward = base.edge_verts[e][0] == fv[j];
+            flipped |= u8::from(!forward) << j;
+            let edges_ok = self.edge_writes.iter().all(|w| {
+                let seg = &self.segments[w.segment as usize];
+                let t = w.grid as usize;
+                let t = if forward { t } else { s - 1 - t };
+                grid[edge_grid(s, j, t)] as usize == seg.block(e) + w.offset as usize
+            });
+            if !edges_ok {
+                return None;
+            }
+            if base.edge_faces.row(e).iter().min() == Some(&to_u32(f)) {
+                if e != self.edge_start[f] as usize + rank {
+                    return None;
+                }
+                owned |= 1 << j;
+                rank += 1;
+            }
+        }
+        (faces_ok && corners_ok).then_some(Patch {
+            points,
+            face: to_u32(f),
+            corner: to_u32(corner),
+            edge: self.edge_start[f],
+            owned,
+            flipped,
+            follows: false,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segments_of_two_levels() {
+        // 9 vertices, 4 quads (16 corners), 12 edges: a 2 x 2 grid.
+        let (segs, total) = segments(2, [9, 4, 16, 12]);
+        let kinds: Vec<(Owner, usize)> = segs.iter().map(|s| (s.owner, s.unit)).collect();
+        assert_eq!(
+            kinds,
+            vec![
+                (Owner::Vertex, 1),
+                (Owner::Face, 1),
+                (Owner::Edge, 1),
+                (Owner::Corner, 1),
+                (Owner::Corner, 1),
+                (Owner::Edge, 2),
+            ]
+        );
+        // 5 x 5 per quad side: 81 vertices at level 2 of a 2 x 2 grid.
+        assert_eq!(total, 81);
+    }
+
+    #[test]
+    fn edge_grid_walks_the_boundary_counter_clockwise() {
+        let s = 3;
+        let walk: Vec<usize> = (0..4)
+            .flat_map(|j| (0..2).map(move |t| edge_grid(s, j, t)))
+            .collect();
+        assert_eq!(walk, vec![0, 1, 2, 5, 8, 7, 6, 3]);
+    }
+}
