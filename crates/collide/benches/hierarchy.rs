@@ -1,80 +1,46 @@
 //! Build, refit, proximity and self-collision on deforming meshes (a waving sheet, a bending
 //! tube) of 10k and 100k triangles (1M with `TAILOR_BENCH_1M=1`), against parry's `TriMesh`
 //! with `TriMeshFlags::DEFORMABLE` (refit through `set_vertices`, point projection) and parry's
-//! `Bvh` self-traversal, in the same run. Both sides get the same triangles.
+//! `Bvh` self-traversal, in the same run. Both sides get the same triangles. Before the timings
+//! it prints the hierarchy's heap bytes per face at each size.
+//!
+//! Every benchmark stops after [`MAX_TIME`] seconds even if it has fewer samples than asked:
+//! the 10k and 100k sizes always get their full count, the 1M size fewer.
 //!
 //! Run with `cargo bench -p tailor-collide --bench hierarchy`.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
+mod shapes;
 
-use common::{Mesh, bent_tube, sheet, wave};
 use divan::Bencher;
-use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::partitioning::BvhWorkspace;
 use parry3d_f64::query::PointQuery;
-use parry3d_f64::shape::{TriMesh, TriMeshFlags};
 use rayon::prelude::*;
-use tailor_collide::{Hierarchy, Point};
+use shapes::{SHAPES, glam, parry, shape, sizes, tailor, waving_sheet};
+use tailor_collide::Point;
+
+/// Seconds after which a benchmark stops sampling.
+const MAX_TIME: u64 = 15;
 
 fn main() {
+    for name in SHAPES {
+        for triangles in sizes() {
+            let (m, frames) = shape(name, triangles);
+            let h = tailor(&m, &frames[0]);
+            let bytes = h.memory_bytes();
+            println!(
+                "memory {name:5} {:>8} triangles: {:>6.1} MB, {:>5.1} bytes per face",
+                h.face_count(),
+                bytes as f64 / 1e6,
+                bytes as f64 / h.face_count() as f64
+            );
+        }
+    }
     divan::main();
 }
 
-/// Triangle counts to run.
-fn sizes() -> Vec<usize> {
-    let mut sizes = vec![10_000, 100_000];
-    if std::env::var_os("TAILOR_BENCH_1M").is_some() {
-        sizes.push(1_000_000);
-    }
-    sizes
-}
-
-/// A triangulated sheet of about `triangles` triangles and two wave frames a small step apart
-/// (vertices move up to about 6 mm, as in one step of a fast motion).
-fn waving_sheet(triangles: usize) -> (Mesh, [Vec<Point>; 2]) {
-    let n = ((triangles / 2) as f64).sqrt().round() as u32;
-    let m = sheet(n, |_, _| 0.0).triangulated();
-    let frames = [0.0, 0.02].map(|t| m.mapped(|p| wave(p, t)));
-    (m, frames)
-}
-
-/// A triangulated tube of about `triangles` triangles, straight and slightly bent.
-fn bending_tube(triangles: usize) -> (Mesh, [Vec<Point>; 2]) {
-    let k = ((triangles / 2) as f64 / 8.0).sqrt().round() as u32 * 2;
-    let n = (triangles / (2 * k as usize)) as u32 + 1;
-    let frames = [0.5, 0.503].map(|bend| bent_tube(n, k, 0.05, bend).positions);
-    (bent_tube(n, k, 0.05, 0.5).triangulated(), frames)
-}
-
-const SHAPES: [&str; 2] = ["sheet", "tube"];
-
-fn shape(name: &str, triangles: usize) -> (Mesh, [Vec<Point>; 2]) {
-    if name == "sheet" {
-        waving_sheet(triangles)
-    } else {
-        bending_tube(triangles)
-    }
-}
-
-fn glam(points: &[Point]) -> Vec<DVec3> {
-    points.iter().map(|p| DVec3::new(p.x, p.y, p.z)).collect()
-}
-
-fn tailor(m: &Mesh, positions: &[Point]) -> Hierarchy {
-    Hierarchy::build(positions, &m.offsets, &m.corners).unwrap()
-}
-
-fn parry(m: &Mesh, positions: &[Point]) -> TriMesh {
-    let indices = m
-        .corners
-        .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]])
-        .collect();
-    TriMesh::with_flags(glam(positions), indices, TriMeshFlags::DEFORMABLE).unwrap()
-}
-
-#[divan::bench_group]
+#[divan::bench_group(max_time = MAX_TIME)]
 mod build {
     use super::*;
 
@@ -91,7 +57,7 @@ mod build {
     }
 }
 
-#[divan::bench_group]
+#[divan::bench_group(max_time = MAX_TIME)]
 mod refit {
     use super::*;
 
@@ -120,7 +86,7 @@ mod refit {
 }
 
 /// Every vertex of a second sheet hovering 1 cm above, within 5 cm.
-#[divan::bench_group]
+#[divan::bench_group(max_time = MAX_TIME)]
 mod proximity {
     use super::*;
 
@@ -155,7 +121,7 @@ mod proximity {
 /// Self-collision of the deforming mesh: tailor's normal-cone-culled self-intersection test
 /// (exact triangle tests included) and continuous self-impacts over the step, against parry's
 /// `Bvh` self-traversal (overlapping leaf pairs only, no exact test).
-#[divan::bench_group(sample_count = 20)]
+#[divan::bench_group(sample_count = 20, max_time = MAX_TIME)]
 mod self_collision {
     use super::*;
 

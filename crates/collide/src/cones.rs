@@ -11,9 +11,13 @@
 //!
 //! The direction tried is the superface's area-weighted mean normal (the sum of its triangles'
 //! cross products), the axis of its normal cone; condition (1) is then a sign test per
-//! triangle, with no square root. The test runs lazily, top-down, on the nodes the traversal
-//! visits: a smooth sheet is cleared by one linear pass at the root, and a node that fails
-//! usually fails on its first few triangles.
+//! triangle, with no square root. That sum needs no pass over the triangles: expanding
+//! `(b - a) × (c - a) = a × b + b × c + c × a`, the terms of edges shared by two faces cancel,
+//! so it is `Σ p × q` over the directed boundary edges `p → q` (Stokes' theorem for the
+//! vector area), taken relative to a boundary vertex to keep its digits. Any direction would be
+//! sound, since every triangle is then checked against it. The test runs lazily, top-down, on
+//! the nodes the traversal visits: a smooth sheet is cleared by one linear pass at the root,
+//! and a node that fails usually fails on its first few triangles.
 //!
 //! Over a step every vertex moves linearly, so a triangle normal
 //! `n(t) = (b(t) - a(t)) × (c(t) - a(t))` is quadratic in `t`; in the Bernstein basis its three
@@ -37,59 +41,88 @@ use crate::hierarchy::Hierarchy;
 /// this many radians: culling must never be optimistic.
 const MARGIN: f64 = 1e-6;
 
-/// The Bernstein coefficients of every triangle's normal over the motion of the last refit.
+/// The Bernstein coefficients of the triangles' normals over the motion of the last refit,
+/// computed from the positions where a test needs them (a cross product costs less than
+/// storing and reloading it, and a smooth sheet needs each one once).
 pub(crate) struct NormalCones {
-    /// `per` coefficients for each triangle, one after another.
-    normals: Vec<DVec3>,
-    per: usize,
+    swept: bool,
 }
 
 impl NormalCones {
-    /// Computes the normal coefficients of every triangle, in parallel.
+    /// The normal cones of `h` at its last refit.
     pub(crate) fn new(h: &Hierarchy) -> Self {
-        let swept = h.is_swept();
-        let per = if swept { 3 } else { 1 };
-        let mut normals = vec![DVec3::ZERO; per * h.triangle_count()];
-        normals
-            .par_chunks_mut(per)
-            .enumerate()
-            .with_min_len(1024)
-            .for_each(|(t, out)| {
-                let [a0, b0, c0] = h.triangle_at(t, &h.start);
-                out[0] = (b0 - a0).cross(c0 - a0);
-                if swept {
-                    let [a1, b1, c1] = h.triangle_at(t, h.end());
-                    out[1] = ((b0 - a0).cross(c1 - a1) + (b1 - a1).cross(c0 - a0)) / 2.0;
-                    out[2] = (b1 - a1).cross(c1 - a1);
-                }
-            });
-        Self { normals, per }
+        Self {
+            swept: h.is_swept(),
+        }
     }
 
-    /// The normal coefficients of the triangles of face `f`.
-    fn of_face(&self, h: &Hierarchy, f: u32) -> &[DVec3] {
-        let range = h.topology.face_triangles(f);
-        &self.normals[range.start * self.per..range.end * self.per]
+    /// Whether `each` holds for the normal coefficients of triangle `t`; stops at the first
+    /// that fails.
+    #[inline]
+    fn all_of_triangle(&self, h: &Hierarchy, t: usize, each: impl Fn(DVec3) -> bool) -> bool {
+        let [a0, b0, c0] = h.triangle_at(t, &h.start);
+        let (e0, g0) = (b0 - a0, c0 - a0);
+        if !self.swept {
+            return each(e0.cross(g0));
+        }
+        let [a1, b1, c1] = h.triangle_at(t, h.end());
+        let (e1, g1) = (b1 - a1, c1 - a1);
+        each(e0.cross(g0)) && each((e0.cross(g1) + e1.cross(g0)) / 2.0) && each(e1.cross(g1))
+    }
+
+    /// The sum of the normal coefficients of the triangles below `node`, from its boundary
+    /// (see the module docs): `Σ p × q` at the start and at the end, and the Bernstein middle
+    /// term `Σ (p0 × q1 + p1 × q0) / 2` of a swept refit, relative to the first boundary vertex.
+    fn boundary_axis(&self, h: &Hierarchy, node: u32) -> DVec3 {
+        let boundary = h.node_boundary(node);
+        let Some(&[origin, _]) = boundary.first() else {
+            return DVec3::ZERO;
+        };
+        let rel = |x: &[DVec3], v: u32| x[v as usize] - x[origin as usize];
+        let (start, end) = (&h.start[..], h.end());
+        boundary.iter().fold(DVec3::ZERO, |sum, &[p, q]| {
+            let (p0, q0) = (rel(start, p), rel(start, q));
+            if !self.swept {
+                return sum + p0.cross(q0);
+            }
+            let (p1, q1) = (rel(end, p), rel(end, q));
+            sum + p0.cross(q0) + (p0.cross(q1) + p1.cross(q0)) / 2.0 + p1.cross(q1)
+        })
     }
 
     /// Whether no two features below `node` can touch during the step (see the module docs).
+    ///
+    /// A large node's faces are checked in parallel, in fixed chunks.
     pub(crate) fn cannot_self_collide(&self, h: &Hierarchy, node: u32) -> bool {
         let faces = h.leaves_below(node);
-        let axis: DVec3 = faces
-            .iter()
-            .flat_map(|&f| self.of_face(h, f))
-            .copied()
-            .sum();
+        let axis = self.boundary_axis(h, node);
         let (axis_len2, cos2) = (axis.length_squared(), (MARGIN).sin().powi(2));
         let front = |n: &DVec3| {
             let d = n.dot(axis);
             d > 0.0 && d * d > cos2 * n.length_squared() * axis_len2
         };
-        axis_len2 > 0.0
-            && faces.iter().all(|&f| self.of_face(h, f).iter().all(front))
-            && contour_does_not_fold(h, node, axis.normalize())
+        let seen = |t: usize| self.all_of_triangle(h, t, |n| front(&n));
+        // The root holds every triangle: check them in memory order.
+        let all_seen = || {
+            if faces.len() == h.face_count() {
+                (0..h.triangle_count())
+                    .into_par_iter()
+                    .with_min_len(CHUNK)
+                    .all(seen)
+            } else {
+                faces.par_chunks(CHUNK).all(|chunk| {
+                    chunk
+                        .iter()
+                        .all(|&f| h.topology.face_triangles(f).all(seen))
+                })
+            }
+        };
+        axis_len2 > 0.0 && all_seen() && contour_does_not_fold(h, node, axis.normalize())
     }
 }
+
+/// Faces a thread sums or checks in a row.
+const CHUNK: usize = 8192;
 
 /// Whether the boundary of `node`, projected along `axis`, winds exactly once around its moving
 /// centroid with every edge turning forward at every time of the step.

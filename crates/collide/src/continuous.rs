@@ -7,7 +7,9 @@
 //! vertices *owned* by `f` against the triangles of `g` (and the reverse) and the edges owned by
 //! `f` against those owned by `g` (see [`crate::topology`]), so each pair of features is tested
 //! once. Within one mesh, pairs sharing a vertex are skipped, and the normal cones over the step
-//! ([`crate::cones`]) clear whole smooth regions.
+//! ([`crate::cones`]) clear whole smooth regions. Against a body, cloth only needs its vertices
+//! kept out of the body's triangles ([`Hierarchy::vertex_impacts_with`]): the same traversal
+//! with the vertex–triangle tests alone.
 
 use crate::ccd::{CONTACT_SLACK, edge_edge, vertex_triangle};
 use crate::cones::NormalCones;
@@ -58,21 +60,28 @@ enum Found {
 }
 
 impl Impacts {
-    fn from_found(found: Vec<Found>) -> Self {
-        let mut impacts = Impacts::default();
+    /// Refills the lists from what the traversal found, sorted, reusing their storage.
+    fn refill(&mut self, found: Vec<Found>) {
+        self.vertex_triangle.clear();
+        self.triangle_vertex.clear();
+        self.edge_edge.clear();
         for f in found {
             match f {
-                Found::VertexTriangle(i) => impacts.vertex_triangle.push(i),
-                Found::TriangleVertex(i) => impacts.triangle_vertex.push(i),
-                Found::EdgeEdge(i) => impacts.edge_edge.push(i),
+                Found::VertexTriangle(i) => self.vertex_triangle.push(i),
+                Found::TriangleVertex(i) => self.triangle_vertex.push(i),
+                Found::EdgeEdge(i) => self.edge_edge.push(i),
             }
         }
-        for list in [&mut impacts.vertex_triangle, &mut impacts.triangle_vertex] {
-            list.sort_unstable_by_key(|i| (i.vertex, i.triangle));
+        for list in [&mut self.vertex_triangle, &mut self.triangle_vertex] {
+            sort_vertex_triangle(list);
         }
-        impacts.edge_edge.sort_unstable_by_key(|i| i.edges);
-        impacts
+        self.edge_edge.sort_unstable_by_key(|i| i.edges);
     }
+}
+
+/// Sorts vertex–triangle impacts by vertex, then triangle.
+fn sort_vertex_triangle(list: &mut [VertexTriangleImpact]) {
+    list.sort_unstable_by_key(|i| (i.vertex, i.triangle));
 }
 
 impl Hierarchy {
@@ -80,6 +89,13 @@ impl Hierarchy {
     /// of the last swept refit, excluding pairs that share a vertex.
     #[must_use]
     pub fn self_impacts(&self) -> Impacts {
+        let mut out = Impacts::default();
+        self.self_impacts_into(&mut out);
+        out
+    }
+
+    /// [`Hierarchy::self_impacts`] into `out`, reusing its lists from step to step.
+    pub fn self_impacts_into(&self, out: &mut Impacts) {
         let cones = NormalCones::new(self);
         let visit = |a: u32, b: u32, out: &mut Vec<Found>| {
             let (f, g) = (a.min(b), a.max(b));
@@ -89,31 +105,66 @@ impl Hierarchy {
             }
             edges_against_edges(self, f, self, g, true, out);
         };
-        Impacts::from_found(self_pairs(self, Some(&cones), true, CONTACT_SLACK, &visit))
+        out.refill(self_pairs(
+            self,
+            Some(&cones),
+            true,
+            CONTACT_SLACK,
+            0.0,
+            &visit,
+        ));
     }
 
     /// Every vertex–triangle and edge–edge contact between this mesh and `other` during the
     /// motions of their last swept refits.
     #[must_use]
     pub fn impacts_with(&self, other: &Hierarchy) -> Impacts {
+        let mut out = Impacts::default();
+        self.impacts_with_into(other, &mut out);
+        out
+    }
+
+    /// [`Hierarchy::impacts_with`] into `out`, reusing its lists from step to step.
+    pub fn impacts_with_into(&self, other: &Hierarchy, out: &mut Impacts) {
         let visit = |f: u32, g: u32, out: &mut Vec<Found>| {
             vertices_against_face(self, f, other, g, false, Found::VertexTriangle, out);
             vertices_against_face(other, g, self, f, false, Found::TriangleVertex, out);
             edges_against_edges(self, f, other, g, false, out);
         };
-        Impacts::from_found(cross_pairs(self, other, CONTACT_SLACK, &visit))
+        out.refill(cross_pairs(self, other, CONTACT_SLACK, &visit));
+    }
+
+    /// The vertices of this mesh touching triangles of `other` during the motions of their
+    /// last swept refits, sorted by vertex then triangle: the part of
+    /// [`Hierarchy::impacts_with`] that keeps cloth vertices out of a body, without the
+    /// edge–edge tests or the body's vertices.
+    #[must_use]
+    pub fn vertex_impacts_with(&self, other: &Hierarchy) -> Vec<VertexTriangleImpact> {
+        let mut out = Vec::new();
+        self.vertex_impacts_with_into(other, &mut out);
+        out
+    }
+
+    /// [`Hierarchy::vertex_impacts_with`] into `out` (cleared first), reusing its allocation.
+    pub fn vertex_impacts_with_into(&self, other: &Hierarchy, out: &mut Vec<VertexTriangleImpact>) {
+        let visit = |f: u32, g: u32, out: &mut Vec<VertexTriangleImpact>| {
+            vertices_against_face(self, f, other, g, false, |i| i, out);
+        };
+        out.clear();
+        out.append(&mut cross_pairs(self, other, CONTACT_SLACK, &visit));
+        sort_vertex_triangle(out);
     }
 }
 
 /// The vertices owned by face `f` of `hv` against the triangles of face `g` of `ht`.
-fn vertices_against_face(
+fn vertices_against_face<T>(
     hv: &Hierarchy,
     f: u32,
     ht: &Hierarchy,
     g: u32,
     same_mesh: bool,
-    wrap: fn(VertexTriangleImpact) -> Found,
-    out: &mut Vec<Found>,
+    wrap: fn(VertexTriangleImpact) -> T,
+    out: &mut Vec<T>,
 ) {
     for &v in hv.topology.owned_vertices(f) {
         let path = [hv.start[v as usize], hv.end()[v as usize]];

@@ -8,11 +8,17 @@
 //! points or over subtrees, and their results do not depend on the number of threads:
 //!
 //! - proximity ([`Hierarchy::closest_points`], [`Hierarchy::faces_within`],
-//!   [`Hierarchy::self_proximity`]) for repulsion and for the body's inside test
-//!   ([`Hierarchy::signed_distances`]);
+//!   [`Hierarchy::self_proximity`], [`Hierarchy::edge_proximity`]) for repulsion and for the
+//!   body's inside test ([`Hierarchy::signed_distances`]);
 //! - exact triangle–triangle crossings ([`Hierarchy::self_intersections`]);
-//! - continuous collisions over a step ([`Hierarchy::self_impacts`], [`Hierarchy::impacts_with`]),
-//!   vertex–triangle and edge–edge, after Bridson, Fedkiw & Anderson 2002.
+//! - continuous collisions over a step ([`Hierarchy::self_impacts`], [`Hierarchy::impacts_with`],
+//!   and [`Hierarchy::vertex_impacts_with`] for the vertex–triangle part alone), after Bridson,
+//!   Fedkiw & Anderson 2002.
+//!
+//! The queries a simulation runs every step also come as `_into` variants
+//! ([`Hierarchy::closest_points_into`], [`Hierarchy::self_impacts_into`], …) that refill a
+//! buffer the caller keeps from step to step instead of allocating the answer. The hierarchy
+//! itself takes memory linear in the faces ([`Hierarchy::memory_bytes`]).
 //!
 //! Self-collision queries skip every superface whose normals fit in a cone narrower than a
 //! half-space and whose boundary does not fold back (Volino & Magnenat-Thalmann 1994, Provot
@@ -25,6 +31,7 @@ mod ccd;
 mod cones;
 mod continuous;
 mod convert;
+mod edges;
 mod error;
 mod hierarchy;
 mod inside;
@@ -36,6 +43,7 @@ mod triangle;
 
 pub use ccd::{edge_edge_impact, vertex_triangle_impact};
 pub use continuous::{EdgeEdgeImpact, Impacts, VertexTriangleImpact};
+pub use edges::{EdgeProximity, segments_closest_points};
 pub use error::CollideError;
 pub use hierarchy::Hierarchy;
 pub use proximity::{Closest, Neighbours};

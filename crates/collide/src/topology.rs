@@ -11,6 +11,7 @@
 //! features is ever tested twice.
 
 use crate::error::CollideError;
+use crate::hierarchy::heap;
 
 /// Validated faces with their fan triangles, edges and feature owners. All tables are flat.
 #[derive(Clone, Debug)]
@@ -34,6 +35,9 @@ pub(crate) struct Topology {
     /// CSR: the edges (indices into `edges`) each face owns.
     pub(crate) owned_edge_offsets: Vec<u32>,
     pub(crate) owned_edges: Vec<u32>,
+    /// How many fan triangles every face has, when all faces have the same size (a triangle
+    /// or quad mesh): the triangles of a face then follow from its index alone.
+    uniform_fan: Option<u32>,
 }
 
 impl Topology {
@@ -55,18 +59,30 @@ impl Topology {
             }
         }
 
-        // Every triangle edge with the face using it; sorting groups the users of one edge,
-        // lowest face first, so the first user is the owner.
-        let mut uses: Vec<([u32; 2], u32)> = Vec::with_capacity(3 * triangles.len());
-        for f in 0..face_count {
-            for t in face_triangle_range(face_offsets, f) {
-                let [a, b, c] = triangles[t];
-                for (p, q) in [(a, b), (b, c), (c, a)] {
-                    uses.push(([p.min(q), p.max(q)], f as u32));
-                }
+        // Every triangle edge with the face using it, bucketed by its lower vertex (a counting
+        // sort) and sorted within each bucket, which groups the users of one edge, lowest face
+        // first, so the first user is the owner.
+        let mut bucket = vec![0u32; vertex_count + 1];
+        for [a, b, c] in &triangles {
+            for low in [a.min(b), b.min(c), c.min(a)] {
+                bucket[*low as usize + 1] += 1;
             }
         }
-        uses.sort_unstable();
+        for v in 0..vertex_count {
+            bucket[v + 1] += bucket[v];
+        }
+        let mut cursor = bucket.clone();
+        let mut uses: Vec<([u32; 2], u32)> = vec![([0, 0], 0); 3 * triangles.len()];
+        for (t, &[a, b, c]) in triangles.iter().enumerate() {
+            for (p, q) in [(a, b), (b, c), (c, a)] {
+                let slot = &mut cursor[p.min(q) as usize];
+                uses[*slot as usize] = ([p.min(q), p.max(q)], triangle_face[t]);
+                *slot += 1;
+            }
+        }
+        for w in bucket.windows(2) {
+            uses[w[0] as usize..w[1] as usize].sort_unstable();
+        }
         let mut edges = Vec::new();
         let mut edge_triangle_count = Vec::new();
         let mut edge_owner = Vec::new();
@@ -95,6 +111,11 @@ impl Topology {
         }
         let (owned_vertex_offsets, owned_vertices) = group_by_owner(&vertex_owner, face_count);
         let (owned_edge_offsets, owned_edges) = group_by_owner(&edge_owner, face_count);
+        // The tables live as long as the mesh: give back what growing them left over.
+        for table in [&mut edges, &mut adjacency] {
+            table.shrink_to_fit();
+        }
+        edge_triangle_count.shrink_to_fit();
         Ok(Self {
             vertex_count,
             face_offsets: face_offsets.to_vec(),
@@ -108,7 +129,23 @@ impl Topology {
             owned_vertices,
             owned_edge_offsets,
             owned_edges,
+            uniform_fan: uniform_fan(face_offsets),
         })
+    }
+
+    /// Heap bytes held by the tables.
+    pub(crate) fn memory_bytes(&self) -> usize {
+        heap(&self.face_offsets)
+            + heap(&self.face_vertices)
+            + heap(&self.triangles)
+            + heap(&self.triangle_face)
+            + heap(&self.edges)
+            + heap(&self.edge_triangle_count)
+            + heap(&self.adjacency)
+            + heap(&self.owned_vertex_offsets)
+            + heap(&self.owned_vertices)
+            + heap(&self.owned_edge_offsets)
+            + heap(&self.owned_edges)
     }
 
     /// Number of faces.
@@ -124,7 +161,10 @@ impl Topology {
 
     /// The indices of the fan triangles of face `f`.
     pub(crate) fn face_triangles(&self, f: u32) -> std::ops::Range<usize> {
-        face_triangle_range(&self.face_offsets, f as usize)
+        match self.uniform_fan {
+            Some(k) => (f * k) as usize..((f + 1) * k) as usize,
+            None => face_triangle_range(&self.face_offsets, f as usize),
+        }
     }
 
     /// The vertices face `f` owns.
@@ -152,6 +192,15 @@ impl Topology {
 /// The triangles of face `f` under fan triangulation.
 fn face_triangle_range(face_offsets: &[u32], f: usize) -> std::ops::Range<usize> {
     face_offsets[f] as usize - 2 * f..face_offsets[f + 1] as usize - 2 * (f + 1)
+}
+
+/// The number of fan triangles of every face, if all faces have the same number of corners
+/// and the triangle count fits in `u32`.
+fn uniform_fan(face_offsets: &[u32]) -> Option<u32> {
+    let corners = face_offsets[1] - face_offsets[0];
+    let triangles = u32::try_from((face_offsets.len() - 1) * (corners as usize - 2)).ok()?;
+    let uniform = face_offsets.windows(2).all(|w| w[1] - w[0] == corners);
+    (uniform && triangles < u32::MAX).then_some(corners - 2)
 }
 
 /// Groups item indices by owner (counting sort); owners `u32::MAX` (none) are left out.
@@ -232,6 +281,12 @@ mod tests {
         assert_eq!(t.face_triangles(0), 0..2);
         assert_eq!(t.face_triangles(1), 2..5);
         assert_eq!(t.triangle_face, vec![0, 0, 1, 1, 1]);
+        assert_eq!(t.uniform_fan, None);
+        // Two quads: the triangles of a face follow from its index.
+        let quads = Topology::new(6, &[0, 4, 8], &[0, 1, 4, 3, 1, 2, 5, 4]).unwrap();
+        assert_eq!(quads.uniform_fan, Some(2));
+        assert_eq!(quads.face_triangles(1), 2..4);
+        assert_eq!(quads.triangle_face, vec![0, 0, 1, 1]);
     }
 
     #[test]

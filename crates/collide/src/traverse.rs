@@ -20,12 +20,13 @@ pub(crate) type Visit<'a, T> = &'a (dyn Fn(u32, u32, &mut Vec<T>) + Sync);
 
 /// Visits every unordered pair of distinct leaves of `h` with overlapping boxes, each leaf with
 /// itself too when `same_leaf`, skipping nodes that `cones` clear. Boxes are compared loosened
-/// by `slack` (see [`overlap`]).
+/// by `slack` and `pad` (see [`overlap`]).
 pub(crate) fn self_pairs<T: Send>(
     h: &Hierarchy,
     cones: Option<&NormalCones>,
     same_leaf: bool,
     slack: f64,
+    pad: f64,
     visit: Visit<'_, T>,
 ) -> Vec<T> {
     let mut out = Vec::new();
@@ -33,6 +34,7 @@ pub(crate) fn self_pairs<T: Send>(
         ha: h,
         hb: h,
         slack,
+        pad,
         visit,
     };
     SelfWalk {
@@ -56,16 +58,19 @@ pub(crate) fn cross_pairs<T: Send>(
         ha: a,
         hb: b,
         slack,
+        pad: 0.0,
         visit,
     };
     walk.cross(a.root(), b.root(), &mut out);
     out
 }
 
-/// Whether two boxes overlap once each is loosened by `slack` times its diagonal: the contact
-/// tolerance of the exact tests is relative to the size of the features.
-fn overlap(a: &Aabb, b: &Aabb, slack: f64) -> bool {
-    let pad = DVec3::splat(slack * ((a.maxs - a.mins).length() + (b.maxs - b.mins).length()));
+/// Whether two boxes overlap once each is loosened by `slack` times its diagonal (the contact
+/// tolerance of the exact tests is relative to the size of the features) and together by the
+/// distance `pad` (a proximity query's reach).
+fn overlap(a: &Aabb, b: &Aabb, slack: f64, pad: f64) -> bool {
+    let relative = slack * ((a.maxs - a.mins).length() + (b.maxs - b.mins).length());
+    let pad = DVec3::splat(relative + pad);
     (a.mins - pad).cmple(b.maxs).all() && (b.mins - pad).cmple(a.maxs).all()
 }
 
@@ -79,6 +84,7 @@ struct Walk<'a, T> {
     ha: &'a Hierarchy,
     hb: &'a Hierarchy,
     slack: f64,
+    pad: f64,
     visit: Visit<'a, T>,
 }
 
@@ -86,7 +92,7 @@ impl<T: Send> Walk<'_, T> {
     /// Visits the overlapping leaf pairs below node `a` of `ha` and node `b` of `hb`.
     fn cross(&self, a: u32, b: u32, out: &mut Vec<T>) {
         let (ha, hb) = (self.ha, self.hb);
-        if !overlap(&ha.boxes[a as usize], &hb.boxes[b as usize], self.slack) {
+        if !overlap(&ha.node_box(a), &hb.node_box(b), self.slack, self.pad) {
             return;
         }
         let (size_a, size_b) = (ha.leaf_counts[a as usize], hb.leaf_counts[b as usize]);

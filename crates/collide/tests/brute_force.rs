@@ -10,7 +10,8 @@ use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::Triangle;
 use tailor_collide::{
-    CollideError, Hierarchy, Point, edge_edge_impact, triangles_intersect, vertex_triangle_impact,
+    CollideError, Hierarchy, Impacts, Neighbours, Point, edge_edge_impact, segments_closest_points,
+    triangles_intersect, vertex_triangle_impact,
 };
 
 fn build(m: &Mesh) -> Hierarchy {
@@ -168,15 +169,17 @@ fn brute_self_intersections(m: &Mesh, positions: &[Point]) -> Vec<[u32; 2]> {
     pairs
 }
 
+/// A sheet crumpled enough to pass through itself.
+fn crumpled(p: &Point) -> Point {
+    Point::new(
+        p.x,
+        p.y + 0.3 * (5.0 * p.x).sin(),
+        0.25 * (9.0 * p.x).cos() * (7.0 * p.y).sin(),
+    )
+}
+
 #[test]
 fn self_intersections_match_brute_force() {
-    let crumpled = |p: &Point| {
-        Point::new(
-            p.x,
-            p.y + 0.3 * (5.0 * p.x).sin(),
-            0.25 * (9.0 * p.x).cos() * (7.0 * p.y).sin(),
-        )
-    };
     let mut cases = vec![];
     for (name, m) in meshes() {
         cases.push((name, m.positions.clone(), m.clone()));
@@ -441,6 +444,9 @@ fn answers_do_not_depend_on_thread_count() {
     let end = folded_sheet(70, 0.35).positions;
     let mut rng = Rng::new(9);
     let queries: Vec<Point> = (0..300).map(|_| rng.point(1.0)).collect();
+    // A ball the closing fold sweeps through.
+    let mut ball = sphere(8, 12, 0.15);
+    ball.positions = ball.mapped(|p| Point::new(p.x + 0.2, p.y + 0.5, p.z));
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -450,18 +456,24 @@ fn answers_do_not_depend_on_thread_count() {
             let mut h = build(&m);
             h.refit_swept(&start, &end, 0.01).unwrap();
             let impacts = h.self_impacts();
+            let mut body = build(&ball);
+            body.refit_swept(&ball.positions, &ball.positions, 0.0)
+                .unwrap();
+            let body_hits = h.vertex_impacts_with(&body);
             h.refit(&end, 0.0).unwrap();
             (
-                h.depth(),
-                h.closest_points(&queries, 0.2).unwrap(),
+                (h.depth(), h.closest_points(&queries, 0.2).unwrap()),
                 h.self_proximity(0.02).unwrap(),
                 h.self_intersections(),
                 impacts,
+                body_hits,
+                h.edge_proximity(0.02).unwrap(),
             )
         })
     };
     let one = run(1);
-    assert!(!one.3.is_empty() && !one.4.vertex_triangle.is_empty());
+    assert!(!one.2.is_empty() && !one.3.vertex_triangle.is_empty());
+    assert!(!one.4.is_empty() && !one.5.is_empty());
     assert_eq!(one, run(2));
 }
 
@@ -523,5 +535,211 @@ fn bad_input_is_an_error_and_degenerate_triangles_are_counted() {
         h.self_intersections()
             .iter()
             .all(|p| !p.contains(&4) && !p.contains(&7))
+    );
+}
+
+#[test]
+fn closest_points_break_ties_and_skip_zero_area_like_brute_force() {
+    // Queries straight above the vertices and edge midpoints of a flat grid of quads, in mesh
+    // order: every answer is a tie between faces (the lowest wins) or between the two
+    // triangles of a quad (the lower wins), and each query starts from its predecessor's face.
+    let grid = common::sheet(12, |_, _| 0.0);
+    let mut queries: Vec<Point> = grid.mapped(|p| Point::new(p.x, p.y, 0.05));
+    queries.extend(grid.mapped(|p| Point::new(p.x + 0.5 / 12.0, p.y, 0.02)));
+    // A soup whose triangles 4 and 7 collapse to a segment and a point, queried at and around
+    // them: the nearest triangle is often a zero-area one, which must be skipped.
+    let s = soup(40, 0.3, 4);
+    let mut collapsed = s.positions.clone();
+    collapsed[13] = collapsed[12] + (collapsed[14] - collapsed[12]) * 0.5;
+    collapsed[22] = collapsed[21];
+    collapsed[23] = collapsed[21];
+    let mut rng = Rng::new(12);
+    let near: Vec<Point> = [12, 13, 14, 21]
+        .iter()
+        .flat_map(|&v| [collapsed[v]; 8])
+        .map(|p| p + rng.point(0.02).coords)
+        .collect();
+    for (name, m, positions, queries) in [
+        ("grid", &grid, grid.positions.clone(), queries),
+        ("collapsed soup", &s, collapsed, near),
+    ] {
+        let mut h = build(m);
+        h.refit(&positions, 0.0).unwrap();
+        for d in [0.03, f64::INFINITY] {
+            let got = h.closest_points(&queries, d).unwrap();
+            for (i, q) in queries.iter().enumerate() {
+                let want = nearest(&all_distances(m, &positions, q), d, |_| false);
+                let got_key = got[i].map(|c| (c.distance, c.face, c.triangle));
+                assert_eq!(got_key, want, "{name}: query {i} within {d}");
+            }
+        }
+    }
+}
+
+#[test]
+fn vertex_impacts_with_a_body_match_brute_force() {
+    let body = sphere(6, 10, 0.5);
+    let body_end = body.mapped(|p| p + tailor_collide::Vector::new(0.05, 0.0, 0.1));
+    let cloth = common::sheet(6, |_, _| 0.7);
+    let lifted = cloth.mapped(|p| Point::new(p.x - 0.5, p.y - 0.5, p.z));
+    let dropped = cloth.mapped(|p| Point::new(p.x - 0.5, p.y - 0.5, -0.2 + 0.3 * p.x));
+    let scraps = soup(80, 0.2, 21);
+    let mut rng = Rng::new(22);
+    let thrown: Vec<Point> = scraps
+        .positions
+        .iter()
+        .map(|p| p * 0.6 + rng.point(0.4).coords)
+        .collect();
+    for (name, m, start, end) in [
+        ("falling sheet", &cloth, lifted, dropped),
+        ("thrown soup", &scraps, scraps.positions.clone(), thrown),
+    ] {
+        let mut hc = build(m);
+        hc.refit_swept(&start, &end, 0.0).unwrap();
+        let mut hb = build(&body);
+        hb.refit_swept(&body.positions, &body_end, 0.0).unwrap();
+        let got: Vec<Key> = hc
+            .vertex_impacts_with(&hb)
+            .iter()
+            .map(|i| (i.vertex, i.triangle, i.time.to_bits()))
+            .collect();
+        let path = |v: u32| [start[v as usize], end[v as usize]];
+        let body_path = |v: u32| [body.positions[v as usize], body_end[v as usize]];
+        let want = brute_vertex_triangle(
+            start.len() as u32,
+            &path,
+            &body.triangles(),
+            &body_path,
+            false,
+        );
+        assert!(!want.is_empty(), "{name}: the case must hit the body");
+        assert_same(&got, &want, name);
+        assert_eq!(
+            hc.vertex_impacts_with(&hb),
+            hc.impacts_with(&hb).vertex_triangle,
+            "{name}"
+        );
+    }
+}
+
+/// Brute force: every pair of edges sharing no vertex within `d`, as (edges, distance bits,
+/// parameter bits).
+fn brute_edge_proximity(m: &Mesh, positions: &[Point], d: f64) -> Vec<(u32, u32, u64, [u64; 2])> {
+    let edges = unique_edges(m);
+    let at = |e: [u32; 2]| e.map(|v| positions[v as usize]);
+    let mut found = Vec::new();
+    for (i, &a) in edges.iter().enumerate() {
+        for (j, &b) in edges.iter().enumerate().skip(i + 1) {
+            if a.iter().any(|v| b.contains(v)) {
+                continue;
+            }
+            let (t, distance) = segments_closest_points(at(a), at(b));
+            if distance <= d {
+                found.push((i as u32, j as u32, distance.to_bits(), t.map(f64::to_bits)));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn edge_proximity_matches_brute_force() {
+    let mut found_any = false;
+    for (name, m) in meshes() {
+        assert_eq!(build(&m).edges(), unique_edges(&m).as_slice(), "{name}");
+        for positions in [m.positions.clone(), m.mapped(crumpled)] {
+            let mut h = build(&m);
+            h.refit(&positions, 0.0).unwrap();
+            for d in [0.02, 0.15] {
+                let near = h.edge_proximity(d).unwrap();
+                let got: Vec<_> = near
+                    .iter()
+                    .map(|p| {
+                        let [i, j] = p.edges;
+                        (i, j, p.distance.to_bits(), p.parameters.map(f64::to_bits))
+                    })
+                    .collect();
+                let want = brute_edge_proximity(&m, &positions, d);
+                found_any |= !want.is_empty();
+                assert_same(&got, &want, name);
+                for p in &near {
+                    let [a, b] = p.edges.map(|e| h.edges()[e as usize]);
+                    let on = |e: [u32; 2], t: f64| {
+                        positions[e[0] as usize]
+                            + (positions[e[1] as usize] - positions[e[0] as usize]) * t
+                    };
+                    let gap = on(b, p.parameters[1]) - on(a, p.parameters[0]);
+                    if p.distance > 0.0 {
+                        assert!((gap - p.direction * p.distance).norm() < 1e-12, "{name}");
+                    }
+                }
+            }
+        }
+    }
+    assert!(found_any);
+}
+
+#[test]
+fn into_variants_reuse_their_buffers() {
+    let m = folded_sheet(16, 0.0);
+    let end = folded_sheet(16, 0.35).positions;
+    let mut body = build(&sphere(6, 8, 0.2));
+    body.refit_swept(
+        &sphere(6, 8, 0.2).positions,
+        &sphere(6, 8, 0.2).positions,
+        0.0,
+    )
+    .unwrap();
+    let mut h = build(&m);
+    let mut rng = Rng::new(31);
+    let queries: Vec<Point> = (0..50).map(|_| rng.point(1.0)).collect();
+    let (mut closest, mut within, mut near) =
+        (Vec::new(), Neighbours::default(), Neighbours::default());
+    let (mut impacts, mut body_impacts, mut vertex_hits, mut edges) = (
+        Impacts::default(),
+        Impacts::default(),
+        Vec::new(),
+        Vec::new(),
+    );
+    // Two steps with different answers through the same buffers.
+    for (from, to) in [(&m.positions, &end), (&end, &m.positions)] {
+        h.refit_swept(from, to, 0.0).unwrap();
+        h.self_impacts_into(&mut impacts);
+        assert_eq!(impacts, h.self_impacts());
+        h.impacts_with_into(&body, &mut body_impacts);
+        assert_eq!(body_impacts, h.impacts_with(&body));
+        h.vertex_impacts_with_into(&body, &mut vertex_hits);
+        assert_eq!(vertex_hits, h.vertex_impacts_with(&body));
+        h.refit(to, 0.0).unwrap();
+        h.closest_points_into(&queries, 0.3, &mut closest).unwrap();
+        assert_eq!(closest, h.closest_points(&queries, 0.3).unwrap());
+        h.faces_within_into(&queries, 0.1, &mut within).unwrap();
+        assert_eq!(within, h.faces_within(&queries, 0.1).unwrap());
+        h.self_proximity_into(0.05, &mut near).unwrap();
+        assert_eq!(near, h.self_proximity(0.05).unwrap());
+        h.edge_proximity_into(0.05, &mut edges).unwrap();
+        assert_eq!(edges, h.edge_proximity(0.05).unwrap());
+    }
+    assert!(!impacts.vertex_triangle.is_empty() && !edges.is_empty());
+    // A bad argument is an error that leaves the buffer as it was.
+    let before = edges.clone();
+    assert!(h.edge_proximity_into(-1.0, &mut edges).is_err());
+    assert_eq!(edges, before);
+}
+
+#[test]
+fn memory_is_linear_in_faces() {
+    let per_face = |n: u32| {
+        let m = common::sheet(n, |x, y| 0.1 * (6.0 * x).sin() * y).triangulated();
+        build(&m).memory_bytes() as f64 / m.face_count() as f64
+    };
+    let (small, large) = (per_face(20), per_face(80));
+    assert!(
+        small > 100.0 && large < 1000.0,
+        "{small} {large} bytes per face"
+    );
+    assert!(
+        (large / small - 1.0).abs() < 0.15,
+        "{small} vs {large} bytes per face"
     );
 }

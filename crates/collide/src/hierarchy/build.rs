@@ -15,6 +15,7 @@
 
 use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::math::Vector as DVec3;
+use rayon::prelude::*;
 
 use super::Hierarchy;
 use crate::topology::Topology;
@@ -40,16 +41,15 @@ pub(super) fn coarsen(topology: &Topology, positions: &[DVec3]) -> Tree {
     while node.len() > 1 {
         let count = node.len();
         // Phase 1: greedy matching on the adjacency graph, compact pairs first.
-        let mut order: Vec<(f64, [u32; 2])> = edges
-            .iter()
+        // A half-area is a non-negative float, whose bits sort as its value does.
+        let mut order: Vec<(u64, [u32; 2])> = edges
+            .par_iter()
             .map(|&[a, b]| {
-                (
-                    boxes[a as usize].merged(&boxes[b as usize]).half_area(),
-                    [a, b],
-                )
+                let cost = boxes[a as usize].merged(&boxes[b as usize]).half_area();
+                (cost.to_bits(), [a, b])
             })
             .collect();
-        order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        order.par_sort_unstable();
         let mut matched = vec![false; count];
         let mut pairs = Vec::with_capacity(count / 2);
         for (_, [a, b]) in order {
@@ -106,7 +106,7 @@ pub(super) fn coarsen(topology: &Topology, positions: &[DVec3]) -> Tree {
             .filter(|(a, b)| a != b)
             .map(|(a, b)| [a.min(b), a.max(b)])
             .collect();
-        edges.sort_unstable();
+        edges.par_sort_unstable();
         edges.dedup();
         node = next_node;
         boxes = next_boxes;
@@ -157,6 +157,7 @@ pub(super) fn boundary_chains(hierarchy: &Hierarchy) -> (Vec<u32>, Vec<[u32; 2]>
         chain.extend_from_slice(&merged);
         offsets.push(chain.len() as u32);
     }
+    chain.shrink_to_fit();
     (offsets, chain)
 }
 

@@ -8,6 +8,7 @@
 //! depth-first numbering of the faces makes the faces below any node one contiguous slice.
 //! [`build`] makes the tree, [`refit`] the boxes.
 
+mod boxes;
 mod build;
 mod refit;
 
@@ -19,6 +20,9 @@ use crate::Point;
 use crate::convert::to_glam;
 use crate::error::CollideError;
 use crate::topology::Topology;
+
+use boxes::Boxes;
+pub(crate) use boxes::Pending;
 
 /// Below this many nodes a level is refit on one thread.
 const PARALLEL_MIN: usize = 512;
@@ -43,8 +47,8 @@ pub struct Hierarchy {
     /// CSR over nodes: the directed boundary edges of each node's faces (see [`build`]).
     pub(crate) boundary_offsets: Vec<u32>,
     pub(crate) boundary: Vec<[u32; 2]>,
-    /// One box per node, from the last refit.
-    pub(crate) boxes: Vec<Aabb>,
+    /// The box of every node, from the last refit (see [`boxes`]).
+    boxes: Boxes,
     /// Positions of the last refit; for a swept refit, at the start of the step.
     pub(crate) start: Vec<DVec3>,
     /// Positions at the end of the step of a swept refit; empty after a static refit.
@@ -78,15 +82,33 @@ impl Hierarchy {
             leaf_first: Vec::new(),
             boundary_offsets: Vec::new(),
             boundary: Vec::new(),
-            boxes: Vec::new(),
+            boxes: Boxes::default(),
             start,
             end: Vec::new(),
         };
         hierarchy.leaf_counts = hierarchy.fold_up(|_| 1, |a, b| a + b);
         hierarchy.order_leaves();
         (hierarchy.boundary_offsets, hierarchy.boundary) = build::boundary_chains(&hierarchy);
+        hierarchy.boxes = Boxes::new(hierarchy.face_count(), &hierarchy.children);
         hierarchy.refit_boxes(0.0);
         Ok(hierarchy)
+    }
+
+    /// Heap bytes held by the hierarchy: its topology tables, tree, boxes and the positions of
+    /// the last refit (capacities, not lengths). Grows linearly with the face count.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.topology.memory_bytes()
+            + heap(&self.children)
+            + heap(&self.level_offsets)
+            + heap(&self.leaf_counts)
+            + heap(&self.leaf_order)
+            + heap(&self.leaf_first)
+            + heap(&self.boundary_offsets)
+            + heap(&self.boundary)
+            + self.boxes.memory_bytes()
+            + heap(&self.start)
+            + heap(&self.end)
     }
 
     /// Number of faces (leaves).
@@ -164,6 +186,27 @@ impl Hierarchy {
         }
     }
 
+    /// Calls `leaf(face)` for every face whose box (at the last refit) is within squared
+    /// distance `bound` of `q`, except `seed` (which the caller has considered already), nearer
+    /// faces first; `leaf` returns the bound from then on, which may only shrink. `stack` is
+    /// scratch space, reused from query to query.
+    pub(crate) fn visit_near(
+        &self,
+        q: DVec3,
+        bound: f64,
+        seed: Option<u32>,
+        stack: &mut Vec<Pending>,
+        leaf: impl FnMut(u32) -> f64,
+    ) {
+        self.boxes.visit_near(q, bound, seed, stack, leaf);
+    }
+
+    /// The box of `node` at the last refit.
+    pub(crate) fn node_box(&self, node: u32) -> Aabb {
+        self.boxes
+            .node_box(node, self.face_count() as u32, self.root())
+    }
+
     /// The faces below `node`.
     pub(crate) fn leaves_below(&self, node: u32) -> &[u32] {
         let n = node as usize;
@@ -190,7 +233,12 @@ impl Hierarchy {
 
     /// The corners of fan triangle `t` at `positions`.
     pub(crate) fn triangle_at(&self, t: usize, positions: &[DVec3]) -> [DVec3; 3] {
-        self.topology.triangles[t].map(|v| positions[v as usize])
+        let [a, b, c] = self.topology.triangles[t];
+        [
+            positions[a as usize],
+            positions[b as usize],
+            positions[c as usize],
+        ]
     }
 
     /// Computes one value per node bottom-up: `leaf(f)` for face `f`, then `merge` of the two
@@ -201,24 +249,12 @@ impl Hierarchy {
         leaf: impl Fn(u32) -> T + Sync,
         merge: impl Fn(&T, &T) -> T + Sync,
     ) -> Vec<T> {
-        let mut out = Vec::new();
-        self.fold_up_into(&mut out, leaf, merge);
-        out
-    }
-
-    /// [`Hierarchy::fold_up`] into an existing buffer, reusing its allocation.
-    pub(crate) fn fold_up_into<T: Copy + Send + Sync>(
-        &self,
-        out: &mut Vec<T>,
-        leaf: impl Fn(u32) -> T + Sync,
-        merge: impl Fn(&T, &T) -> T + Sync,
-    ) {
         let faces = self.face_count();
-        (0..faces as u32)
+        let mut out: Vec<T> = (0..faces as u32)
             .into_par_iter()
             .with_min_len(PARALLEL_MIN)
             .map(&leaf)
-            .collect_into_vec(out);
+            .collect();
         out.resize(faces + self.children.len(), out[0]);
         for level in self.level_offsets.windows(2) {
             let (lo, hi) = (level[0] as usize, level[1] as usize);
@@ -229,7 +265,22 @@ impl Hierarchy {
                 .zip(&self.children[lo..hi])
                 .for_each(|(o, &[a, b])| *o = merge(&done[a as usize], &done[b as usize]));
         }
+        out
     }
+}
+
+/// Runs a query that fills a buffer (an `_into` variant) on a new one and returns it.
+pub(crate) fn fresh<T: Default>(
+    into: impl FnOnce(&mut T) -> Result<(), CollideError>,
+) -> Result<T, CollideError> {
+    let mut out = T::default();
+    into(&mut out)?;
+    Ok(out)
+}
+
+/// Heap bytes of a vector: its capacity times its element size.
+pub(crate) fn heap<T>(v: &Vec<T>) -> usize {
+    v.capacity() * size_of::<T>()
 }
 
 /// Converts positions to glam, checking their count and that they are finite.

@@ -1,0 +1,419 @@
+//! The boxes of the hierarchy, stored two to a record, and the descent of point queries.
+//!
+//! A query at an internal node compares its two children's boxes, so each internal node is one
+//! record holding both children's boxes and references, as in parry's `Bvh` (a binary "wide"
+//! BVH, Wald, Benthin & Boulos 2008). Record `i` is internal node `F + i`, so the records are in
+//! the tree's level order and every child's record precedes its parent's. The boxes are single
+//! precision, rounded outward: a record takes 60 bytes instead of 108, a box still contains its
+//! faces, and distances to it remain lower bounds, so pruning stays exact; the box tests only
+//! become a little looser, and every answer is decided by an exact test on the faces.
+//!
+//! A refit first rounds each vertex outward to a single-precision box (around its start and end
+//! positions for a swept refit, loosened by the margin), so a face's box is the union of its
+//! corners' boxes with no further rounding. Then it pulls, level by level and in parallel within
+//! a level: a record boxes its leaf children from their corners and merges the two boxes of each
+//! internal child's record, which a lower level has just finished. Each vertex is rounded once,
+//! each face boxed once and each record written once.
+//!
+//! Point queries descend depth first, nearer child first, pruning on a bound that the caller
+//! may shrink as it finds closer faces. A query that starts from a seed face (the answer to a
+//! nearby query) instead climbs from the seed's record to the root, descending into each
+//! sibling subtree whose box is within the bound: one box test per level where a descent from
+//! the root needs two, and the faces near the seed come first.
+
+use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::math::Vector as DVec3;
+use rayon::prelude::*;
+
+use super::heap;
+
+/// Marks a child reference as a leaf: the rest of the bits are the face.
+const LEAF: u32 = 1 << 31;
+
+/// No record: the parent of the root.
+const NONE: u32 = u32::MAX;
+
+/// Records refit in a row by one thread.
+const REFIT_RUN: usize = 1024;
+
+/// Levels with fewer records than this are refit on one thread.
+const PARALLEL_LEVEL: usize = 16 * REFIT_RUN;
+
+/// A box as `[min x, min y, min z, max x, max y, max z]`, rounded outward to `f32`.
+type SmallBox = [f32; 6];
+
+/// The empty box, the identity of [`union`].
+const EMPTY: SmallBox = [
+    f32::INFINITY,
+    f32::INFINITY,
+    f32::INFINITY,
+    f32::NEG_INFINITY,
+    f32::NEG_INFINITY,
+    f32::NEG_INFINITY,
+];
+
+/// One internal node: the boxes and references of its two children.
+#[derive(Clone, Copy, Debug)]
+struct Record {
+    boxes: [SmallBox; 2],
+    /// A child's record index, or `LEAF | face`.
+    child: [u32; 2],
+    /// The parent's record index, [`NONE`] at the root.
+    parent: u32,
+}
+
+/// The boxes of every node of a hierarchy.
+#[derive(Clone, Debug)]
+pub(crate) struct Boxes {
+    records: Vec<Record>,
+    /// For each face, the record holding it and on which side: `record << 1 | side`.
+    leaf_slot: Vec<u32>,
+    /// The root's box (the only face's, for a one-face mesh).
+    root: SmallBox,
+    /// Each vertex's box at the last refit.
+    vertices: Vec<SmallBox>,
+}
+
+/// What a refit boxes: the faces (CSR) and their vertices' motion.
+pub(crate) struct Fit<'a> {
+    pub(crate) face_offsets: &'a [u32],
+    pub(crate) face_vertices: &'a [u32],
+    pub(crate) start: &'a [DVec3],
+    /// The end positions of a swept refit.
+    pub(crate) end: Option<&'a [DVec3]>,
+    pub(crate) margin: f64,
+}
+
+/// A node still to visit: a record, with the squared distance from the query to its box.
+pub(crate) type Pending = (u32, f64);
+
+impl Default for Boxes {
+    fn default() -> Self {
+        Self {
+            records: Vec::new(),
+            leaf_slot: Vec::new(),
+            root: EMPTY,
+            vertices: Vec::new(),
+        }
+    }
+}
+
+impl Boxes {
+    /// The records of the tree with internal nodes `children` over `faces` leaves, unfitted.
+    pub(crate) fn new(faces: usize, children: &[[u32; 2]]) -> Self {
+        let reference = |c: u32| match (c as usize).checked_sub(faces) {
+            None => LEAF | c,
+            Some(i) => i as u32,
+        };
+        let mut records: Vec<Record> = children
+            .iter()
+            .map(|&[a, b]| Record {
+                boxes: [EMPTY; 2],
+                child: [reference(a), reference(b)],
+                parent: NONE,
+            })
+            .collect();
+        let mut leaf_slot = vec![NONE; faces];
+        for r in 0..records.len() {
+            for (side, c) in records[r].child.into_iter().enumerate() {
+                if c & LEAF != 0 {
+                    leaf_slot[(c & !LEAF) as usize] = (r as u32) << 1 | side as u32;
+                } else {
+                    records[c as usize].parent = r as u32;
+                }
+            }
+        }
+        Self {
+            records,
+            leaf_slot,
+            root: EMPTY,
+            vertices: Vec::new(),
+        }
+    }
+
+    /// Recomputes every box bottom-up from `fit`. Internal nodes are stored level by level,
+    /// level `k` being `level_offsets[k]..level_offsets[k + 1]`.
+    pub(crate) fn refit(&mut self, level_offsets: &[u32], fit: &Fit<'_>) {
+        let pad = DVec3::splat(fit.margin);
+        let vertex = |v: usize| {
+            let p = fit.start[v];
+            let (lo, hi) = fit.end.map_or((p, p), |end| (p.min(end[v]), p.max(end[v])));
+            outward(lo - pad, hi + pad)
+        };
+        let count = fit.start.len();
+        if count < PARALLEL_LEVEL {
+            self.vertices.clear();
+            self.vertices.extend((0..count).map(vertex));
+        } else {
+            (0..count)
+                .into_par_iter()
+                .with_min_len(REFIT_RUN)
+                .map(vertex)
+                .collect_into_vec(&mut self.vertices);
+        }
+        let vertices = &self.vertices[..];
+        let face_box = |f: usize| {
+            let corners =
+                &fit.face_vertices[fit.face_offsets[f] as usize..fit.face_offsets[f + 1] as usize];
+            corners
+                .iter()
+                .fold(EMPTY, |b, &v| union(&b, &vertices[v as usize]))
+        };
+        let child_box = |c: u32, done: &[Record]| {
+            if c & LEAF != 0 {
+                face_box((c & !LEAF) as usize)
+            } else {
+                let [a, b] = &done[c as usize].boxes;
+                union(a, b)
+            }
+        };
+        let fit_level = |done: &[Record], level: &mut [Record]| {
+            let fit = |r: &mut Record| {
+                let [a, b] = r.child;
+                r.boxes = [child_box(a, done), child_box(b, done)];
+            };
+            if level.len() < PARALLEL_LEVEL {
+                level.iter_mut().for_each(fit);
+            } else {
+                level.par_iter_mut().with_min_len(REFIT_RUN).for_each(fit);
+            }
+        };
+        let records = &mut self.records;
+        let small = records.len() < PARALLEL_LEVEL;
+        let mut fit_all = || {
+            for level in level_offsets.windows(2) {
+                let (lo, hi) = (level[0] as usize, level[1] as usize);
+                let (done, rest) = records.split_at_mut(lo);
+                fit_level(done, &mut rest[..hi - lo]);
+            }
+        };
+        // A small tree is refit in place; a large one enters the thread pool once for all its
+        // levels, of which only the large lower ones are split.
+        if small {
+            fit_all();
+        } else {
+            rayon::scope(|_| fit_all());
+        }
+        self.root = match self.records.last() {
+            Some(r) => union(&r.boxes[0], &r.boxes[1]),
+            None => face_box(0),
+        };
+    }
+
+    /// The box of `node` of a tree over `faces` faces whose root is `root`.
+    pub(crate) fn node_box(&self, node: u32, faces: u32, root: u32) -> Aabb {
+        let b = if node == root {
+            self.root
+        } else if node < faces {
+            let slot = self.leaf_slot[node as usize];
+            self.records[(slot >> 1) as usize].boxes[(slot & 1) as usize]
+        } else {
+            let [a, b] = &self.records[(node - faces) as usize].boxes;
+            union(a, b)
+        };
+        let (lo, hi) = widen(&b);
+        Aabb::new(lo, hi)
+    }
+
+    /// Heap bytes held.
+    pub(crate) fn memory_bytes(&self) -> usize {
+        heap(&self.records) + heap(&self.leaf_slot) + heap(&self.vertices)
+    }
+
+    /// Calls `leaf(face)` for every face whose box is within squared distance `bound` of `q`,
+    /// nearer faces first; `leaf` returns the bound from then on, which may only shrink. With
+    /// a `seed` face, which the caller has already considered, the walk climbs from it (see the
+    /// module docs) and skips it. `stack` is scratch space.
+    pub(crate) fn visit_near(
+        &self,
+        q: DVec3,
+        mut bound: f64,
+        seed: Option<u32>,
+        stack: &mut Vec<Pending>,
+        mut leaf: impl FnMut(u32) -> f64,
+    ) {
+        let Some(root) = self.records.len().checked_sub(1) else {
+            if seed.is_none() && distance2(&self.root, q) <= bound {
+                leaf(0);
+            }
+            return;
+        };
+        let Some(seed) = seed else {
+            if distance2(&self.root, q) <= bound {
+                self.descend(root as u32, q, bound, stack, &mut leaf);
+            }
+            return;
+        };
+        let slot = self.leaf_slot[seed as usize];
+        let (mut side, mut record) = (slot & 1, slot >> 1);
+        loop {
+            let r = &self.records[record as usize];
+            let other = (1 - side) as usize;
+            if distance2(&r.boxes[other], q) <= bound {
+                let c = r.child[other];
+                bound = if c & LEAF != 0 {
+                    leaf(c & !LEAF)
+                } else {
+                    self.descend(c, q, bound, stack, &mut leaf)
+                };
+            }
+            if r.parent == NONE {
+                return;
+            }
+            let parent = &self.records[r.parent as usize];
+            side = u32::from(parent.child[1] == record);
+            record = r.parent;
+        }
+    }
+
+    /// Visits the faces below `record` within `bound` of `q`, depth first and nearer child
+    /// first; returns the bound at the end.
+    fn descend(
+        &self,
+        mut record: u32,
+        q: DVec3,
+        mut bound: f64,
+        stack: &mut Vec<Pending>,
+        leaf: &mut impl FnMut(u32) -> f64,
+    ) -> f64 {
+        stack.clear();
+        loop {
+            let r = &self.records[record as usize];
+            let (d0, d1) = (distance2(&r.boxes[0], q), distance2(&r.boxes[1], q));
+            let ((near, dn), (far, df)) = if d1 < d0 {
+                ((r.child[1], d1), (r.child[0], d0))
+            } else {
+                ((r.child[0], d0), (r.child[1], d1))
+            };
+            let mut next = None;
+            if dn <= bound {
+                if near & LEAF != 0 {
+                    bound = leaf(near & !LEAF);
+                } else {
+                    next = Some(near);
+                }
+            }
+            if df <= bound {
+                if far & LEAF != 0 {
+                    bound = leaf(far & !LEAF);
+                } else if next.is_none() {
+                    next = Some(far);
+                } else {
+                    stack.push((far, df));
+                }
+            }
+            record = match next {
+                Some(c) => c,
+                None => loop {
+                    match stack.pop() {
+                        None => return bound,
+                        Some((c, d)) if d <= bound => break c,
+                        Some(_) => {}
+                    }
+                },
+            };
+        }
+    }
+}
+
+/// `lo..hi` rounded outward to single precision.
+///
+/// Rounding to nearest moves a value by at most half a unit in the last place of `f32`, at
+/// most `2⁻²⁴` of it, or half the smallest subnormal; widening by `2⁻²³` of the value plus a
+/// subnormal first leaves the rounded value on the safe side, without branches. Values beyond
+/// the range of `f32` go to its largest finite values or to infinity, still on the safe side.
+fn outward(lo: DVec3, hi: DVec3) -> SmallBox {
+    const EPS: f64 = f32::EPSILON as f64;
+    const TINY: f64 = 2e-45;
+    const BIG: f64 = f32::MAX as f64;
+    let down = |x: f64| {
+        let y = x - x.abs() * EPS - TINY;
+        (if y < BIG { y } else { BIG }) as f32
+    };
+    let up = |x: f64| {
+        let y = x + x.abs() * EPS + TINY;
+        (if y > -BIG { y } else { -BIG }) as f32
+    };
+    [
+        down(lo.x),
+        down(lo.y),
+        down(lo.z),
+        up(hi.x),
+        up(hi.y),
+        up(hi.z),
+    ]
+}
+
+/// The corners of a box in double precision.
+fn widen(b: &SmallBox) -> (DVec3, DVec3) {
+    (
+        DVec3::new(b[0].into(), b[1].into(), b[2].into()),
+        DVec3::new(b[3].into(), b[4].into(), b[5].into()),
+    )
+}
+
+/// The box around two boxes.
+fn union(a: &SmallBox, b: &SmallBox) -> SmallBox {
+    let mut out = [0.0; 6];
+    for k in 0..3 {
+        out[k] = if a[k] < b[k] { a[k] } else { b[k] };
+        out[k + 3] = if a[k + 3] > b[k + 3] {
+            a[k + 3]
+        } else {
+            b[k + 3]
+        };
+    }
+    out
+}
+
+/// The squared distance from `q` to box `b` (0 inside).
+fn distance2(b: &SmallBox, q: DVec3) -> f64 {
+    let (lo, hi) = widen(b);
+    (lo - q).max(q - hi).max(DVec3::ZERO).length_squared()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn outward_rounding_contains_the_box() {
+        let values = [
+            0.1,
+            1e-40,
+            1e-310,
+            3.4e38,
+            3.5e38,
+            1e300,
+            123_456.789,
+            7e-3,
+            0.0,
+            f64::INFINITY,
+        ];
+        for x in values.into_iter().flat_map(|x| [x, -x]) {
+            let (lo, hi) = widen(&outward(DVec3::splat(x), DVec3::splat(x)));
+            assert!(lo.x <= x && x <= hi.x, "{x}");
+        }
+        // Representable corners move out by about one unit in the last place.
+        let unit = outward(DVec3::ZERO, DVec3::ONE);
+        assert!(unit[..3].iter().all(|&x| x <= 0.0 && x > -1e-40));
+        assert!(
+            unit[3..]
+                .iter()
+                .all(|&x| (1.0..=1.0 + 3.0 * f32::EPSILON).contains(&x))
+        );
+        let d = distance2(&unit, DVec3::new(2.0, 0.5, -1.0));
+        assert!(d <= 2.0 && d > 2.0 - 1e-6);
+    }
+
+    #[test]
+    fn records_follow_the_tree() {
+        // Faces 0..4; internal nodes 4 = (0, 1), 5 = (2, 3), 6 = (4, 5) the root.
+        let b = Boxes::new(4, &[[0, 1], [2, 3], [4, 5]]);
+        let children: Vec<[u32; 2]> = b.records.iter().map(|r| r.child).collect();
+        assert_eq!(children, [[LEAF, LEAF | 1], [LEAF | 2, LEAF | 3], [0, 1]]);
+        let parents: Vec<u32> = b.records.iter().map(|r| r.parent).collect();
+        assert_eq!(parents, [2, 2, NONE]);
+        assert_eq!(b.leaf_slot, [0, 1, 2, 3]);
+    }
+}
