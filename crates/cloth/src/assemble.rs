@@ -12,7 +12,9 @@
 //! passes with no allocation: every element writes its local forces and 3×3 blocks into its
 //! own slots of flat buffers, then every particle (for f) and every matrix block (for A) sums
 //! the slots that feed it, in a fixed order recorded at construction. The result is the same on
-//! any thread count.
+//! any thread count. An evaluation without [`Coefficients`] (the end of a substep's last Newton
+//! iteration, the symplectic step, the energy) computes forces and energies only: no element
+//! Hessians, no projection, no matrix.
 //!
 //! Dampers follow the lesson's eq. 3, F_i = k_d ((v_j − v_i)·u) u, with the direction u taken
 //! at the step's start (`damping_positions`) — the approximation Baraff & Witkin make in §5.2 —
@@ -23,7 +25,7 @@ use rayon::prelude::*;
 use tailor_subdiv::Point;
 use tailor_subdiv::topology::Csr;
 
-use crate::energy::{self, Local, Mat3, Vec3, expand};
+use crate::energy::{self, Local, Mat3, Vec3, expand_gradient, expand_hessian};
 use crate::matrix::{BlockMatrix, csr_from_sorted};
 use crate::model::Model;
 use crate::reduce::{partial_count, sum_by};
@@ -55,14 +57,11 @@ pub(crate) struct Totals {
     pub potential: f64,
     /// Dissipation function of dampers and drag, W.
     pub dissipation: f64,
-    /// Largest |l/L − 1| over the edges.
-    pub max_strain: f64,
 }
 
-/// One element's contribution.
+/// One element's forces and scalars (its blocks go straight to their slots).
 struct Out<const N: usize, E> {
     force: [Vec3; N],
-    block: [[Mat3; N]; N],
     energy: f64,
     extra: E,
 }
@@ -77,8 +76,8 @@ pub(crate) struct Assembly {
     local_force: Vec<Vec3>,
     local_block: Vec<Mat3>,
     energy: Vec<f64>,
-    /// Per spring: dissipation and strain.
-    spring_extra: Vec<[f64; 2]>,
+    /// Per spring: the damper's dissipation.
+    spring_extra: Vec<f64>,
     partials: Vec<f64>,
 }
 
@@ -101,13 +100,15 @@ fn sources<const N: usize>(
     }
 }
 
-/// Runs `kernel` over `n` elements in parallel, writing each one's outputs to its slots.
+/// Runs `kernel` over `n` elements in parallel, writing each one's outputs to its slots; the
+/// kernel writes its N × N blocks itself, given their slots (only `with_blocks`).
 fn run<const N: usize, E: Send>(
     forces: &mut [Vec3],
     blocks: &mut [Mat3],
     energy: &mut [f64],
     extra: &mut [E],
-    kernel: impl Fn(usize) -> Out<N, E> + Sync,
+    with_blocks: bool,
+    kernel: impl Fn(usize, Option<&mut [Mat3]>) -> Out<N, E> + Sync,
 ) {
     forces
         .par_chunks_mut(N)
@@ -116,29 +117,26 @@ fn run<const N: usize, E: Send>(
         .zip(extra.par_iter_mut())
         .enumerate()
         .for_each(|(e, (((f, b), en), ex))| {
-            let out = kernel(e);
+            let out = kernel(e, with_blocks.then_some(b));
             f.copy_from_slice(&out.force);
-            for (row, local) in b.chunks_exact_mut(N).zip(&out.block) {
-                row.copy_from_slice(local);
-            }
             *en = out.energy;
             *ex = out.extra;
         });
 }
 
-/// Forces −∂E/∂p and blocks scale · ∂²E/∂p² of a d-space energy.
+/// Forces −∂E/∂p of a d-space energy, and into `blocks`, when given, scale · ∂²E/∂p².
 fn conservative<const K: usize, const N: usize>(
     local: &Local<K>,
     coef: &[[f64; N]; K],
-    scale: f64,
-) -> ([Vec3; N], [[Mat3; N]; N]) {
-    let (grad, mut hess) = expand(local, coef);
-    for row in &mut hess {
-        for h in row {
+    blocks: Option<(&mut [Mat3], f64)>,
+) -> [Vec3; N] {
+    if let Some((blocks, scale)) = blocks {
+        expand_hessian(local, coef, blocks);
+        for h in blocks {
             *h *= scale;
         }
     }
-    (grad.map(|g| -g), hess)
+    expand_gradient(local, coef).map(|g| -g)
 }
 
 impl Assembly {
@@ -176,16 +174,18 @@ impl Assembly {
             local_force: vec![Vec3::zeros(); force_pairs.len()],
             local_block: vec![Mat3::zeros(); block_pairs.len()],
             energy: vec![0.0; elements],
-            spring_extra: vec![[0.0; 2]; s.verts.len()],
+            spring_extra: vec![0.0; s.verts.len()],
             partials: vec![0.0; partial_count(elements.max(n))],
             force: vec![Vec3::zeros(); n],
             matrix,
         }
     }
 
-    /// Evaluates forces into [`Self::force`] and the matrix into [`Self::matrix`] at positions
-    /// `x` and velocities `v`, dampers along the edges at `damping_positions`; Hessians of
-    /// non-convex energies are projected to PSD when `project` is set.
+    /// Evaluates forces into [`Self::force`] at positions `x` and velocities `v`, dampers along
+    /// the edges at `damping_positions`, and, given its coefficients `c`, the matrix into
+    /// [`Self::matrix`] (without, the matrix keeps its old values and the element Hessians are
+    /// not assembled); Hessians of non-convex energies are projected to PSD when `project` is
+    /// set.
     #[allow(clippy::too_many_arguments)]
     pub fn evaluate(
         &mut self,
@@ -194,9 +194,13 @@ impl Assembly {
         damping_positions: &[Point],
         v: &[Vec3],
         env: &Environment,
-        c: Coefficients,
+        c: Option<Coefficients>,
         project: bool,
     ) -> Totals {
+        let with_blocks = c.is_some();
+        // Projection changes only Hessians: without a matrix the cheaper raw ones will do.
+        let project = project && with_blocks;
+        let stiffness = c.map(|c| c.stiffness);
         let (s, q, t) = (&model.springs, &model.quads, &model.triples);
         let p = |i: u32| x[i as usize].coords;
         let (fs, fq) = self.local_force.split_at_mut(2 * s.verts.len());
@@ -205,65 +209,81 @@ impl Assembly {
         let (bq, bt) = bq.split_at_mut(16 * q.verts.len());
         let (es, eq) = self.energy.split_at_mut(s.verts.len());
         let (eq, et) = eq.split_at_mut(q.verts.len());
-        run(fs, bs, es, &mut self.spring_extra, |e| {
-            let [a, b] = s.verts[e];
-            let [stretch, compression, kd] = s.stiffness[e];
-            let d = p(a) - p(b);
-            let local = energy::stretch(&d, s.rest[e], stretch, compression, project);
-            let (mut force, mut block) = conservative(&local, &[[1.0, -1.0]], c.stiffness);
-            let u = (damping_positions[a as usize] - damping_positions[b as usize])
-                .try_normalize(0.0)
-                .unwrap_or_else(Vec3::zeros);
-            let closing = (v[a as usize] - v[b as usize]).dot(&u);
-            let damper = u * (kd * closing);
-            force[0] -= damper;
-            force[1] += damper;
-            let dv = u * u.transpose() * (kd * c.damping);
-            block[0][0] += dv;
-            block[1][1] += dv;
-            block[0][1] -= dv;
-            block[1][0] -= dv;
-            Out {
-                force,
-                block,
-                energy: local.energy,
-                extra: [
-                    0.5 * kd * closing * closing,
-                    (d.norm() / s.rest[e] - 1.0).abs(),
-                ],
-            }
-        });
-        run(fq, bq, eq, &mut vec![(); q.verts.len()], |e| {
-            let [p0, p1, p2, p3] = q.verts[e];
-            let local = energy::shear(
-                &(p(p0) - p(p2)),
-                &(p(p1) - p(p3)),
-                q.rest[e],
-                q.stiffness[e],
-                project,
-            );
-            let coef = [[1.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, -1.0]];
-            let (force, block) = conservative(&local, &coef, c.stiffness);
-            Out {
-                force,
-                block,
-                energy: local.energy,
-                extra: (),
-            }
-        });
-        run(ft, bt, et, &mut vec![(); t.verts.len()], |e| {
-            let [p1, p2, p3] = t.verts[e];
-            let k = t.coef[e];
-            let bend = p(p1) * k[0] + p(p2) * k[1] + p(p3) * k[2];
-            let local = energy::bend(&bend, t.rest[e], t.stiffness[e], project);
-            let (force, block) = conservative(&local, &[k], c.stiffness);
-            Out {
-                force,
-                block,
-                energy: local.energy,
-                extra: (),
-            }
-        });
+        run(
+            fs,
+            bs,
+            es,
+            &mut self.spring_extra,
+            with_blocks,
+            |e, mut blocks| {
+                let [a, b] = s.verts[e];
+                let [stretch, compression, kd] = s.stiffness[e];
+                let d = p(a) - p(b);
+                let local = energy::stretch(&d, s.rest[e], stretch, compression, project);
+                let mut force =
+                    conservative(&local, &[[1.0, -1.0]], blocks.as_deref_mut().zip(stiffness));
+                let u = (damping_positions[a as usize] - damping_positions[b as usize])
+                    .try_normalize(0.0)
+                    .unwrap_or_else(Vec3::zeros);
+                let closing = (v[a as usize] - v[b as usize]).dot(&u);
+                let damper = u * (kd * closing);
+                force[0] -= damper;
+                force[1] += damper;
+                if let (Some(block), Some(c)) = (blocks, c) {
+                    let dv = u * u.transpose() * (kd * c.damping);
+                    block[0] += dv;
+                    block[3] += dv;
+                    block[1] -= dv;
+                    block[2] -= dv;
+                }
+                Out {
+                    force,
+                    energy: local.energy,
+                    extra: 0.5 * kd * closing * closing,
+                }
+            },
+        );
+        run(
+            fq,
+            bq,
+            eq,
+            &mut vec![(); q.verts.len()],
+            with_blocks,
+            |e, blocks| {
+                let [p0, p1, p2, p3] = q.verts[e];
+                let local = energy::shear(
+                    &(p(p0) - p(p2)),
+                    &(p(p1) - p(p3)),
+                    q.rest[e],
+                    q.stiffness[e],
+                    project,
+                );
+                let coef = [[1.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, -1.0]];
+                Out {
+                    force: conservative(&local, &coef, blocks.zip(stiffness)),
+                    energy: local.energy,
+                    extra: (),
+                }
+            },
+        );
+        run(
+            ft,
+            bt,
+            et,
+            &mut vec![(); t.verts.len()],
+            with_blocks,
+            |e, blocks| {
+                let [p1, p2, p3] = t.verts[e];
+                let k = t.coef[e];
+                let bend = p(p1) * k[0] + p(p2) * k[1] + p(p3) * k[2];
+                let local = energy::bend(&bend, t.rest[e], t.stiffness[e], project);
+                Out {
+                    force: conservative(&local, &[k], blocks.zip(stiffness)),
+                    energy: local.energy,
+                    extra: (),
+                }
+            },
+        );
         let drag = model.material.drag;
         let (local_force, local_block) = (&self.local_force, &self.local_block);
         let force_sources = &self.force_sources;
@@ -276,34 +296,35 @@ impl Assembly {
             *f =
                 gathered + env.gravity * model.mass[i] - (v[i] - env.wind) * (drag * model.area[i]);
         });
-        let block_sources = &self.block_sources;
-        self.matrix.fill(|slot, row, col| {
-            let mut sum: Mat3 = block_sources
-                .row(slot)
-                .iter()
-                .map(|&k| local_block[k as usize])
-                .sum();
-            if row == col {
-                let i = row as usize;
-                sum +=
-                    Mat3::identity() * (c.mass * model.mass[i] + c.damping * drag * model.area[i]);
-            }
-            sum
-        });
+        if let Some(c) = c {
+            let block_sources = &self.block_sources;
+            self.matrix.fill(|slot, row, col| {
+                let mut sum: Mat3 = block_sources
+                    .row(slot)
+                    .iter()
+                    .map(|&k| local_block[k as usize])
+                    .sum();
+                if row == col {
+                    let i = row as usize;
+                    sum += Mat3::identity()
+                        * (c.mass * model.mass[i] + c.damping * drag * model.area[i]);
+                }
+                sum
+            });
+        }
         let energy = &self.energy;
         let elastic = sum_by(energy.len(), &mut self.partials, |e| energy[e]);
         let gravity = sum_by(x.len(), &mut self.partials, |i| {
             -model.mass[i] * env.gravity.dot(&x[i].coords)
         });
         let extra = &self.spring_extra;
-        let dampers = sum_by(extra.len(), &mut self.partials, |e| extra[e][0]);
+        let dampers = sum_by(extra.len(), &mut self.partials, |e| extra[e]);
         let air = sum_by(v.len(), &mut self.partials, |i| {
             0.5 * drag * model.area[i] * (v[i] - env.wind).norm_squared()
         });
         Totals {
             potential: elastic + gravity,
             dissipation: dampers + air,
-            max_strain: extra.iter().map(|x| x[1]).fold(0.0, f64::max),
         }
     }
 }
@@ -350,13 +371,8 @@ mod tests {
     };
 
     fn force(s: &mut Setup, x: &[Point], v: &[Vec3]) -> Vec<Vec3> {
-        let c = Coefficients {
-            mass: 0.0,
-            damping: 0.0,
-            stiffness: 0.0,
-        };
         s.assembly
-            .evaluate(&s.model, x, &s.x_damp, v, &s.env, c, false);
+            .evaluate(&s.model, x, &s.x_damp, v, &s.env, None, false);
         s.assembly.force.clone()
     }
 
@@ -365,7 +381,7 @@ mod tests {
         let delta: Vec<Vec3> = (0..s.x.len()).map(|_| rng.vec3()).collect();
         let (x, v) = (s.x.clone(), s.v.clone());
         s.assembly
-            .evaluate(&s.model, &x, &s.x_damp, &v, &s.env, c, false);
+            .evaluate(&s.model, &x, &s.x_damp, &v, &s.env, Some(c), false);
         let mut jd = vec![Vec3::zeros(); x.len()];
         s.assembly.matrix.mul_into(&delta, &mut jd);
         let eps = 1e-6;
@@ -404,11 +420,6 @@ mod tests {
     #[test]
     fn force_is_minus_the_energy_gradient() {
         let mut rng = Rng::new(10);
-        let c = Coefficients {
-            mass: 0.0,
-            damping: 0.0,
-            stiffness: 0.0,
-        };
         for seed in 0..5 {
             let mut s = setup(seed, Material::DENIM, WORLD);
             // Moving with the wind, dampers and drag exert nothing: f = −∇U.
@@ -423,7 +434,7 @@ mod tests {
                     .map(|(p, d)| p + d * (sign * eps))
                     .collect();
                 s.assembly
-                    .evaluate(&s.model, &xs, &s.x_damp, &v, &s.env, c, false)
+                    .evaluate(&s.model, &xs, &s.x_damp, &v, &s.env, None, false)
                     .potential
             };
             let fd = (potential(1.0) - potential(-1.0)) / (2.0 * eps);
@@ -503,7 +514,7 @@ mod tests {
         };
         let (x, v) = (s.x.clone(), s.v.clone());
         s.assembly
-            .evaluate(&s.model, &x, &s.x_damp, &v, &s.env, c, true);
+            .evaluate(&s.model, &x, &s.x_damp, &v, &s.env, Some(c), true);
         let a = &s.assembly.matrix;
         for (slot, (i, j)) in a.entries().enumerate() {
             assert_eq!(a.blocks()[slot], a.block(j, i).transpose());

@@ -12,7 +12,8 @@
 //!
 //! Layers, as in the rest of tailor: [`energy`] holds the pure element rules (energies,
 //! gradients, PSD-projected Hessians); [`model`] and [`threads`] the tables built once from the
-//! topology; the assembly, [`matrix`], [`pcg`] and [`simulator`] the per-step evaluation.
+//! topology, as are the solver's multigrid aggregates; the assembly, [`matrix`], [`pcg`] and
+//! [`simulator`] the per-step evaluation.
 //!
 //! Collisions go through `tailor-collide` (Bridson, Fedkiw & Anderson 2002; the private
 //! `collision` module documents each pass). The obstacle is a polygon mesh of fixed topology:
@@ -37,6 +38,7 @@ mod error;
 pub mod material;
 pub mod matrix;
 pub mod model;
+mod multigrid;
 pub mod pcg;
 mod reduce;
 pub mod shapes;

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use tailor_subdiv::topology::Csr;
 
 use crate::energy::{Mat3, Vec3};
+use crate::reduce::CHUNK;
 
 /// A square matrix of 3×3 blocks in CSR form.
 #[derive(Clone, Debug)]
@@ -60,6 +61,18 @@ impl BlockMatrix {
         self.slot(i, j).map_or_else(Mat3::zeros, |s| self.blocks[s])
     }
 
+    /// Row and column of the block in `slot`.
+    #[must_use]
+    pub fn entry(&self, slot: usize) -> (u32, u32) {
+        (self.rows[slot], self.pattern.items[slot])
+    }
+
+    /// Columns of the blocks stored in row `i`, sorted.
+    #[must_use]
+    pub fn columns(&self, i: usize) -> &[u32] {
+        self.pattern.row(i)
+    }
+
     /// All stored blocks, row after row.
     #[must_use]
     pub fn blocks(&self) -> &[Mat3] {
@@ -85,14 +98,24 @@ impl BlockMatrix {
 
     /// y = A x.
     pub fn mul_into(&self, x: &[Vec3], y: &mut [Vec3]) {
-        y.par_iter_mut().enumerate().for_each(|(i, yi)| {
+        y.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, y)| self.mul_rows(c * CHUNK, x, y));
+    }
+
+    /// Rows `first..first + y.len()` of A x into `y`.
+    pub fn mul_rows(&self, first: usize, x: &[Vec3], y: &mut [Vec3]) {
+        for (i, yi) in (first..).zip(y) {
             let range = self.pattern.range(i);
             let mut sum = Vec3::zeros();
-            for s in range {
-                sum += self.blocks[s] * x[self.pattern.items[s] as usize];
+            for (block, &col) in self.blocks[range.clone()]
+                .iter()
+                .zip(&self.pattern.items[range])
+            {
+                sum += block * x[col as usize];
             }
             *yi = sum;
-        });
+        }
     }
 }
 

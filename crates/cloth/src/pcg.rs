@@ -4,25 +4,29 @@
 //! pinned particle, I − n nᵀ for one held against a plane with normal n, I for a free one. CG
 //! runs on the filtered system, every residual and search direction passing through S, so the
 //! constrained components of the unknown keep their initial values *exactly*: the constraints
-//! are not soft penalties. The preconditioner is block-Jacobi: the inverse of each particle's
-//! 3×3 diagonal block (SPD because the mass is). Dot products are summed in fixed-size
-//! chunks combined in order, so iterates are identical on any number of threads.
+//! are not soft penalties. The preconditioner is one V-cycle of aggregation multigrid on the
+//! filtered matrix (the private `multigrid` module), symmetric so CG stays CG: about 20
+//! iterations per substep of the 64² drape in contact where block-Jacobi alone needed 150.
+//! Each iteration makes a few parallel passes over fixed chunks of particles; dot products are
+//! summed per chunk and the chunks combined in order, so iterates are identical on any number
+//! of threads.
 
 use rayon::prelude::*;
 
 use crate::energy::{Mat3, Vec3};
 use crate::matrix::BlockMatrix;
-use crate::reduce::{dot, partial_count};
+use crate::multigrid::Multigrid;
+use crate::reduce::{CHUNK, partial_count};
 
-/// Buffers for [`Pcg::solve`], allocated once for a problem size.
+/// Buffers and the multigrid hierarchy for [`Pcg::solve`], made once for a matrix pattern.
 #[derive(Clone, Debug)]
 pub struct Pcg {
     r: Vec<Vec3>,
-    z: Vec<Vec3>,
     p: Vec<Vec3>,
     q: Vec<Vec3>,
-    inverse_diagonal: Vec<Mat3>,
-    partials: Vec<f64>,
+    multigrid: Multigrid,
+    /// Per chunk of [`CHUNK`] particles: up to two partial sums of a pass.
+    partials: Vec<[f64; 2]>,
 }
 
 /// How a solve ended.
@@ -34,23 +38,48 @@ pub struct Solve {
     pub converged: bool,
 }
 
+/// Runs `pass(first particle, chunk)` over `chunks`, the fixed chunks of [`CHUNK`] particles
+/// of some arrays, in parallel, each returning two partial sums, and adds those in chunk
+/// order: the same bytes on any number of threads.
+fn chunked<T: Send>(
+    chunks: impl IndexedParallelIterator<Item = T>,
+    partials: &mut [[f64; 2]],
+    pass: impl Fn(usize, T) -> [f64; 2] + Sync,
+) -> [f64; 2] {
+    let partials = &mut partials[..chunks.len()];
+    chunks
+        .zip(partials.par_iter_mut())
+        .enumerate()
+        .for_each(|(c, (chunk, part))| *part = pass(c * CHUNK, chunk));
+    [0, 1].map(|k| partials.iter().map(|p| p[k]).sum())
+}
+
+/// a · b, summed as [`chunked`] does.
+fn dot(a: &[Vec3], b: &[Vec3], partials: &mut [[f64; 2]]) -> f64 {
+    let [sum, _] = chunked(a.par_chunks(CHUNK), partials, |base, a| {
+        let sum = a.iter().zip(&b[base..]).map(|(a, b)| a.dot(b)).sum();
+        [sum, 0.0]
+    });
+    sum
+}
+
 impl Pcg {
-    /// Buffers for `n` particles.
+    /// Buffers and hierarchy for systems with the pattern of `pattern` (its values unused).
     #[must_use]
-    pub fn new(n: usize) -> Self {
+    pub fn new(pattern: &BlockMatrix) -> Self {
+        let n = pattern.size();
         Self {
             r: vec![Vec3::zeros(); n],
-            z: vec![Vec3::zeros(); n],
             p: vec![Vec3::zeros(); n],
             q: vec![Vec3::zeros(); n],
-            inverse_diagonal: vec![Mat3::identity(); n],
-            partials: vec![0.0; partial_count(n)],
+            multigrid: Multigrid::new(pattern),
+            partials: vec![[0.0; 2]; partial_count(n)],
         }
     }
 
     /// Solves S A S x = S b for the free components of `x`, starting from `x` (whose filtered
     /// part is a warm start and whose constrained part, (I − S) x, is left untouched), until
-    /// |S (b − A x)| ≤ `tolerance` · |S b|.
+    /// |S (b − A x)| ≤ `tolerance` · |S b|. `a` must have the pattern given to [`Self::new`].
     pub fn solve(
         &mut self,
         a: &BlockMatrix,
@@ -62,76 +91,72 @@ impl Pcg {
     ) -> Solve {
         let Self {
             r,
-            z,
             p,
             q,
-            inverse_diagonal,
+            multigrid,
             partials,
         } = self;
-        inverse_diagonal
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(i, d)| {
-                let block = a.block(i as u32, i as u32);
-                *d = block.try_inverse().unwrap_or_else(Mat3::identity);
-            });
+        multigrid.update(a, filter);
         a.mul_into(x, q);
-        r.par_iter_mut()
-            .enumerate()
-            .for_each(|(i, ri)| *ri = filter[i] * (b[i] - q[i]));
-        z.par_iter_mut()
-            .enumerate()
-            .for_each(|(i, zi)| *zi = filter[i] * b[i]);
-        let target = tolerance * tolerance * dot(z, z, partials);
-        let precondition = |r: &[Vec3], z: &mut [Vec3]| {
-            z.par_iter_mut()
-                .enumerate()
-                .for_each(|(i, zi)| *zi = filter[i] * (inverse_diagonal[i] * r[i]));
-        };
-        precondition(r, z);
-        p.copy_from_slice(z);
+        let q_start = &*q;
+        let [bb, mut residual] = chunked(r.par_chunks_mut(CHUNK), partials, |base, r| {
+            let mut sums = [0.0; 2];
+            for (i, r) in (base..).zip(r) {
+                let sb = filter[i] * b[i];
+                *r = filter[i] * (b[i] - q_start[i]);
+                sums[0] += sb.dot(&sb);
+                sums[1] += r.dot(r);
+            }
+            sums
+        });
+        let target = tolerance * tolerance * bb;
+        let z = multigrid.apply(a, filter, r);
         let mut rz = dot(r, z, partials);
+        p.copy_from_slice(z);
         let mut iterations = 0;
         loop {
-            let residual = dot(r, r, partials);
-            if !residual.is_finite() {
+            if !residual.is_finite() || iterations >= max_iterations || residual <= target {
                 return Solve {
                     iterations,
-                    converged: false,
-                };
-            }
-            if residual <= target {
-                return Solve {
-                    iterations,
-                    converged: true,
-                };
-            }
-            if iterations >= max_iterations {
-                return Solve {
-                    iterations,
-                    converged: false,
+                    converged: residual <= target,
                 };
             }
             iterations += 1;
-            a.mul_into(p, q);
-            q.par_iter_mut()
-                .enumerate()
-                .for_each(|(i, qi)| *qi = filter[i] * *qi);
-            let alpha = rz / dot(p, q, partials);
-            x.par_iter_mut()
-                .zip(r.par_iter_mut())
-                .enumerate()
-                .for_each(|(i, (xi, ri))| {
-                    *xi += p[i] * alpha;
-                    *ri -= q[i] * alpha;
-                });
-            precondition(r, z);
+            // q = S A p, with the partial sums of p · q.
+            let p_now = &*p;
+            let [pq, _] = chunked(q.par_chunks_mut(CHUNK), partials, |base, q| {
+                a.mul_rows(base, p_now, q);
+                let mut pq = 0.0;
+                for (i, q) in (base..).zip(q) {
+                    *q = filter[i] * *q;
+                    pq += p_now[i].dot(q);
+                }
+                [pq, 0.0]
+            });
+            let alpha = rz / pq;
+            // x += α p, r −= α q, with the partial sums of r · r.
+            let q_now = &*q;
+            let chunks = x.par_chunks_mut(CHUNK).zip(r.par_chunks_mut(CHUNK));
+            [residual, _] = chunked(chunks, partials, |base, (x, r)| {
+                let mut rr = 0.0;
+                for (i, (x, r)) in (base..).zip(x.iter_mut().zip(r)) {
+                    *x += p_now[i] * alpha;
+                    *r -= q_now[i] * alpha;
+                    rr += r.dot(r);
+                }
+                [rr, 0.0]
+            });
+            let z = multigrid.apply(a, filter, r);
             let rz_next = dot(r, z, partials);
             let beta = rz_next / rz;
             rz = rz_next;
-            p.par_iter_mut()
-                .zip(z.par_iter())
-                .for_each(|(pi, zi)| *pi = zi + *pi * beta);
+            p.par_chunks_mut(CHUNK)
+                .zip(z.par_chunks(CHUNK))
+                .for_each(|(p, z)| {
+                    for (p, z) in p.iter_mut().zip(z) {
+                        *p = z + *p * beta;
+                    }
+                });
         }
     }
 }
@@ -155,7 +180,13 @@ mod tests {
 
     #[test]
     fn solves_spd_systems_and_keeps_constrained_components() {
-        let n = 50;
+        // 50 particles are preconditioned by block-Jacobi alone, 2000 through the hierarchy.
+        for n in [50, 2000] {
+            solves_and_keeps_constraints(n);
+        }
+    }
+
+    fn solves_and_keeps_constraints(n: usize) {
         let a = chain(n);
         let b: Vec<Vec3> = (0..n)
             .map(|i| Vec3::new(i as f64, 1.0, -(i as f64).sin()))
@@ -167,16 +198,20 @@ mod tests {
         let mut x = vec![Vec3::zeros(); n];
         x[3] = Vec3::new(0.5, -0.25, 2.0);
         x[7] = Vec3::new(0.0, 0.75, 0.0);
-        let mut pcg = Pcg::new(n);
+        let mut pcg = Pcg::new(&a);
         let solve = pcg.solve(&a, &filter, &b, &mut x, 1e-12, 500);
         assert!(solve.converged);
         assert_eq!(x[3], Vec3::new(0.5, -0.25, 2.0));
         assert_eq!(x[7].y, 0.75);
         let mut ax = vec![Vec3::zeros(); n];
         a.mul_into(&x, &mut ax);
+        let scale: f64 = (0..n).map(|i| (filter[i] * b[i]).norm_squared()).sum();
         for i in 0..n {
             let residual = filter[i] * (b[i] - ax[i]);
-            assert!(residual.norm() < 1e-9, "row {i}: {residual}");
+            assert!(
+                residual.norm() < 1e-11 * scale.sqrt(),
+                "row {i}: {residual}"
+            );
         }
     }
 }

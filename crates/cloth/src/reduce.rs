@@ -6,8 +6,6 @@
 
 use rayon::prelude::*;
 
-use crate::energy::Vec3;
-
 /// Items per chunk.
 pub(crate) const CHUNK: usize = 1024;
 
@@ -24,9 +22,4 @@ pub(crate) fn sum_by(n: usize, partials: &mut [f64], f: impl Fn(usize) -> f64 + 
         *p = (c * CHUNK..end).map(&f).sum();
     });
     partials.iter().sum()
-}
-
-/// a · b over flat arrays of 3-vectors.
-pub(crate) fn dot(a: &[Vec3], b: &[Vec3], partials: &mut [f64]) -> f64 {
-    sum_by(a.len(), partials, |i| a[i].dot(&b[i]))
 }

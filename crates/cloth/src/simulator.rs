@@ -206,12 +206,13 @@ impl Simulator {
             }
         }
         let n = model.vertex_count();
+        let assembly = Assembly::new(&model);
         Ok(Self {
             collisions: Collisions::new(&model)?,
             strain_limiter: StrainLimiter::new(&model.springs, n),
             constraints: Constraints::new(n),
-            assembly: Assembly::new(&model),
-            pcg: Pcg::new(n),
+            pcg: Pcg::new(&assembly.matrix),
+            assembly,
             work: Work {
                 x0: vec![Point::origin(); n],
                 v0: vec![Vec3::zeros(); n],
@@ -406,11 +407,16 @@ impl Simulator {
     /// halvings (the state then holds the last good substep).
     pub fn step(&mut self, state: &mut State, dt: f64) -> Result<StepReport, ClothError> {
         let count = self.check_state(state, dt)?;
-        let mut report = StepReport::default();
-        for _ in 0..count {
-            self.advance(state, dt / f64::from(count), 0, &mut report)?;
-        }
-        Ok(report)
+        // The whole step runs on a worker of the thread pool: each of its many short
+        // parallel passes then forks from there rather than waking the pool from outside and
+        // waiting for it.
+        rayon::scope(|_| {
+            let mut report = StepReport::default();
+            for _ in 0..count {
+                self.advance(state, dt / f64::from(count), 0, &mut report)?;
+            }
+            Ok(report)
+        })
     }
 
     fn advance(
@@ -435,9 +441,9 @@ impl Simulator {
         }
     }
 
-    /// Evaluates at velocities `work.trial`: positions, forces, matrix, the right-hand side
-    /// −R and the incremental potential Φ.
-    fn evaluate(&mut self, h: f64) -> Evaluated {
+    /// Evaluates at velocities `work.trial`: positions, forces, the right-hand side −R, the
+    /// incremental potential Φ and, `with_matrix`, the matrix of the next linear solve.
+    fn evaluate(&mut self, h: f64, with_matrix: bool) -> Evaluated {
         let env = self.environment();
         let Work {
             x0,
@@ -451,11 +457,11 @@ impl Simulator {
         for ((x, x0), v) in x.iter_mut().zip(x0.iter()).zip(trial.iter()) {
             *x = x0 + v * h;
         }
-        let c = Coefficients {
+        let c = with_matrix.then_some(Coefficients {
             mass: 1.0,
             damping: h,
             stiffness: h * h,
-        };
+        });
         let totals = self.assembly.evaluate(
             &self.model,
             x,
@@ -503,7 +509,7 @@ impl Simulator {
         for (i, v) in w.trial.iter_mut().enumerate() {
             *v = w.filter.z[i] - w.filter.s[i] * w.filter.z[i];
         }
-        let mut at = self.evaluate(h);
+        let mut at = self.evaluate(h, true);
         for iteration in 0..self.settings.newton_iterations {
             let w = &mut self.work;
             w.v.copy_from_slice(&w.trial);
@@ -534,7 +540,8 @@ impl Simulator {
                 for ((t, v), d) in w.trial.iter_mut().zip(&w.v).zip(&w.delta) {
                     *t = v + d * alpha;
                 }
-                let next = self.evaluate(h);
+                // The last iteration's end needs only forces and Φ, not another matrix.
+                let next = self.evaluate(h, iteration + 1 < self.settings.newton_iterations);
                 let enough = next.phi <= at.phi - 1e-4 * alpha * slope;
                 if !self.settings.line_search || enough || alpha < 1e-3 || !next.phi.is_finite() {
                     at = next;
@@ -611,11 +618,6 @@ impl Simulator {
         let h = dt / f64::from(count);
         let env = self.environment();
         let mut report = StepReport::default();
-        let forces_only = Coefficients {
-            mass: 0.0,
-            damping: 0.0,
-            stiffness: 0.0,
-        };
         for _ in 0..count {
             let t1 = state.time + h;
             let w = &mut self.work;
@@ -628,15 +630,8 @@ impl Simulator {
                 &mut w.filter,
             );
             let x = &state.positions;
-            self.assembly.evaluate(
-                &self.model,
-                x,
-                x,
-                &state.velocities,
-                &env,
-                forces_only,
-                false,
-            );
+            self.assembly
+                .evaluate(&self.model, x, x, &state.velocities, &env, None, false);
             let f = &self.assembly.force;
             let s = &w.filter;
             for i in 0..x.len() {
@@ -669,15 +664,10 @@ impl Simulator {
     /// Kinetic + elastic + gravitational energy of `state`, J.
     pub fn energy(&mut self, state: &State) -> f64 {
         let env = self.environment();
-        let c = Coefficients {
-            mass: 0.0,
-            damping: 0.0,
-            stiffness: 0.0,
-        };
         let x = &state.positions;
-        let totals = self
-            .assembly
-            .evaluate(&self.model, x, x, &state.velocities, &env, c, false);
+        let totals =
+            self.assembly
+                .evaluate(&self.model, x, x, &state.velocities, &env, None, false);
         let mass = &self.model.mass;
         let v = &state.velocities;
         totals.potential

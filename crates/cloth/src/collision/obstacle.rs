@@ -11,7 +11,7 @@
 //! ([`Hierarchy::impacts_with`]), so a vertex cannot cross a body face between two substeps
 //! however fast either moves (Bridson, Fedkiw & Anderson 2002, §6).
 
-use tailor_collide::{Closest, CollideError, Hierarchy};
+use tailor_collide::{Closest, CollideError, Hierarchy, VertexTriangleImpact};
 use tailor_subdiv::Point;
 
 use super::Motion;
@@ -38,6 +38,8 @@ pub(crate) struct Obstacle {
     substep: [Vec<Point>; 2],
     /// Velocity of each body vertex over the current substep.
     velocity: Vec<Vec3>,
+    /// The continuous pass's impacts, kept to reuse the allocation.
+    impacts: Vec<VertexTriangleImpact>,
 }
 
 impl Obstacle {
@@ -55,6 +57,7 @@ impl Obstacle {
             frame: [positions.to_vec(), positions.to_vec()],
             substep: [positions.to_vec(), positions.to_vec()],
             velocity: vec![Vec3::zeros(); n],
+            impacts: Vec::new(),
         })
     }
 
@@ -178,10 +181,10 @@ impl Obstacle {
         let mut moved = 0;
         for _ in 0..IMPACT_ROUNDS {
             cloth.refit_swept(m.x0, m.x, 0.0)?;
-            let impacts = cloth.impacts_with(&self.hierarchy).vertex_triangle;
+            cloth.vertex_impacts_with_into(&self.hierarchy, &mut self.impacts);
             let mut changed = false;
             // Sorted by vertex: take each vertex's earliest impact.
-            for group in impacts.chunk_by(|a, b| a.vertex == b.vertex) {
+            for group in self.impacts.chunk_by(|a, b| a.vertex == b.vertex) {
                 let hit = group
                     .iter()
                     .min_by(|a, b| a.time.total_cmp(&b.time))
