@@ -10,8 +10,8 @@
 //! Each energy depends on the points only through one or two *difference vectors*
 //! d = Σ c_a p_a (p1 − p2 for a spring, a diagonal for shear, the weighted second difference
 //! for bend), so this module works in d-space: it returns the energy, its gradient and its
-//! Hessian with respect to the d's, and [`expand_gradient`] and [`expand_hessian`] map them to
-//! the points (chain rule with the constant coefficients c). Stretch and bend are both a
+//! Hessian with respect to the d's, which the assembly (`crate::assemble`) maps to the points
+//! by the chain rule with the constant coefficients c. Stretch and bend are both a
 //! *radial spring* ½ κ (|d| − r)², whose Hessian κ [d̂ d̂ᵀ + (1 − r/|d|)(I − d̂ d̂ᵀ)] is
 //! indefinite when |d| < r; shear is a product of two radial springs.
 //!
@@ -175,42 +175,6 @@ pub fn shear(d1: &Vec3, d2: &Vec3, rest: [f64; 2], k: f64, project: bool) -> Loc
     }
 }
 
-/// Maps a d-space gradient to the `N` points of an element, where d_k = Σ_a `coef[k][a]` p_a:
-/// ∂E/∂p_a = Σ_k c_ka g_k.
-#[must_use]
-pub fn expand_gradient<const K: usize, const N: usize>(
-    local: &Local<K>,
-    coef: &[[f64; N]; K],
-) -> [Vec3; N] {
-    let mut grad = [Vec3::zeros(); N];
-    for (g_k, c_k) in local.grad.iter().zip(coef) {
-        for (g, c) in grad.iter_mut().zip(c_k) {
-            *g += g_k * *c;
-        }
-    }
-    grad
-}
-
-/// Maps a d-space Hessian to the `N` points of an element, where d_k = Σ_a `coef[k][a]` p_a:
-/// ∂²E/∂p_a∂p_b = Σ_kl c_ka c_lb G_kl, written to `out[a * N + b]` (`out` holds N × N blocks).
-pub fn expand_hessian<const K: usize, const N: usize>(
-    local: &Local<K>,
-    coef: &[[f64; N]; K],
-    out: &mut [Mat3],
-) {
-    assert_eq!(out.len(), N * N, "an N × N block buffer");
-    out.fill(Mat3::zeros());
-    for (row, c_k) in local.hess.iter().zip(coef) {
-        for (h_kl, c_l) in row.iter().zip(coef) {
-            for (out_a, ca) in out.chunks_exact_mut(N).zip(c_k) {
-                for (out, cb) in out_a.iter_mut().zip(c_l) {
-                    *out += h_kl * (ca * cb);
-                }
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     //! Finite-difference checks of every energy's gradient and Hessian, and PSD projection.
@@ -321,18 +285,5 @@ mod tests {
         assert!((soft.energy - 0.5 * 0.25).abs() < 1e-15);
         let long = stretch(&(d * 3.0), 1.0, 100.0, 1.0, false);
         assert!((long.energy - 100.0 * 0.5 * 0.25).abs() < 1e-12);
-    }
-
-    #[test]
-    fn expand_applies_the_chain_rule() {
-        let local = bend(&Vec3::new(0.3, -0.1, 0.2), 0.1, 2.0, false);
-        let coef = [[1.0, -3.0, 2.0]];
-        let g = expand_gradient(&local, &coef);
-        let mut h = [Mat3::zeros(); 9];
-        expand_hessian(&local, &coef, &mut h);
-        assert!((g[1] - local.grad[0] * -3.0).norm() < 1e-15);
-        assert!((h[2] - local.hess[0][0] * 2.0).norm() < 1e-15);
-        let sum: Vec3 = g.iter().sum();
-        assert!(sum.norm() < 1e-15);
     }
 }

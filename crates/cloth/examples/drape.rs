@@ -1,0 +1,69 @@
+//! Issue 4's drape scenario, frame by frame: a 2 m square sheet of n² vertices falling 0.5 m
+//! onto a sphere of radius 0.5 m, 60 frames at 24 fps (5 substeps each). Prints per frame the
+//! time, the solver's work (Newton and CG iterations), the contacts, the fail-safe's impacts
+//! and the worst edge strain, then the totals: the figures behind the `step` benchmark.
+//!
+//! `cargo run --release -p tailor-cloth --example drape -- [N] [--self] [--frames F]`
+
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use tailor_cloth::shapes::{sheet, sphere};
+use tailor_cloth::{Material, Model, Settings, Simulator, State};
+use tailor_subdiv::Point;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut n = 64;
+    let mut frames = 60;
+    let mut self_collision = false;
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--self" => self_collision = true,
+            "--frames" => frames = args.next().ok_or("--frames needs a count")?.parse()?,
+            size => n = size.parse()?,
+        }
+    }
+    let mut garment = sheet(n, n, 2.0, 2.0);
+    let centred: Vec<Point> = garment
+        .positions()
+        .iter()
+        .map(|p| p - Vector3::new(1.0, 0.0, 1.0))
+        .collect();
+    garment.set_positions(&centred)?;
+    let model = Model::new(&garment, &Material::COTTON)?;
+    let settings = Settings {
+        self_collision,
+        ..Settings::default()
+    };
+    let mut sim = Simulator::new(model, settings)?;
+    let ball = sphere(Point::new(0.0, -1.0, 0.0), 0.5, 24, 48);
+    sim.set_obstacle(ball.positions(), ball.face_offsets(), ball.face_vertices())?;
+    let mut state = State::at_rest(sim.model());
+    println!("frame      ms  newton      cg  contacts  impacts  strain");
+    let (mut total_ms, mut worst_strain, mut total_cg) = (0.0, 0.0f64, 0u64);
+    for frame in 1..=frames {
+        let start = Instant::now();
+        let report = sim.step(&mut state, 1.0 / 24.0)?;
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        total_ms += ms;
+        worst_strain = worst_strain.max(report.max_strain);
+        total_cg += u64::from(report.cg_iterations);
+        println!(
+            "{frame:5} {ms:7.1} {:7} {:7} {:9} {:8} {:6.1}%",
+            report.newton_iterations,
+            report.cg_iterations,
+            report.contacts,
+            report.impacts,
+            100.0 * report.max_strain
+        );
+    }
+    println!(
+        "{n}² self-collision {}: {:.1} ms/frame, {:.1} CG iterations/frame, worst strain {:.1}%",
+        if self_collision { "on" } else { "off" },
+        total_ms / f64::from(frames),
+        total_cg as f64 / f64::from(frames),
+        100.0 * worst_strain
+    );
+    Ok(())
+}
