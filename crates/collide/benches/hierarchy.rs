@@ -1,5 +1,5 @@
 //! Build, refit, proximity and self-collision on deforming meshes (a waving sheet, a bending
-//! tube) of 10k and 100k triangles (1M with `TAILOR_BENCH_1M=1`), against parry's `TriMesh`
+//! tube; self-collision also on a sheet rolling up) of 10k and 100k triangles (1M with `TAILOR_BENCH_1M=1`), against parry's `TriMesh`
 //! with `TriMeshFlags::DEFORMABLE` (refit through `set_vertices`, point projection) and parry's
 //! `Bvh` self-traversal, in the same run. Both sides get the same triangles. Before the timings
 //! it prints the hierarchy's heap bytes per face at each size.
@@ -125,14 +125,14 @@ mod proximity {
 mod self_collision {
     use super::*;
 
-    #[divan::bench(args = sizes(), consts = [0, 1])]
+    #[divan::bench(args = sizes(), consts = [0, 1, 2])]
     fn tailor_self_intersections<const SHAPE: usize>(bencher: Bencher, triangles: usize) {
         let (m, frames) = shape(SHAPES[SHAPE], triangles);
         let h = tailor(&m, &frames[1]);
         bencher.bench(|| h.self_intersections());
     }
 
-    #[divan::bench(args = sizes(), consts = [0, 1])]
+    #[divan::bench(args = sizes(), consts = [0, 1, 2])]
     fn tailor_self_impacts<const SHAPE: usize>(bencher: Bencher, triangles: usize) {
         let (m, frames) = shape(SHAPES[SHAPE], triangles);
         let mut h = tailor(&m, &frames[0]);
@@ -140,7 +140,7 @@ mod self_collision {
         bencher.bench(|| h.self_impacts());
     }
 
-    #[divan::bench(args = sizes(), consts = [0, 1])]
+    #[divan::bench(args = sizes(), consts = [0, 1, 2])]
     fn parry_bvh_self_traversal<const SHAPE: usize>(bencher: Bencher, triangles: usize) {
         let (m, frames) = shape(SHAPES[SHAPE], triangles);
         let mesh = parry(&m, &frames[1]);

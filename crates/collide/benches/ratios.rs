@@ -2,9 +2,14 @@
 //! each of tailor's runs is followed at once by parry's on the same input, and each side keeps
 //! its fastest run, so a burst of load elsewhere slows both or is forgotten. Prints one line
 //! per operation and size: tailor's time, parry's, and parry's over tailor's (above 1 when
-//! tailor is faster).
+//! tailor is faster), and the hierarchy's heap bytes per face. Build, refit and proximity run
+//! on the waving sheet and the bending tube; self-collision also on the rolling sheet, whose
+//! self-proximity (every vertex against the faces within a cloth thickness) is timed too. The
+//! parry side of every self-collision line is its `Bvh` self-traversal (overlapping leaf pairs
+//! only, no exact test), the same reference for all.
 //!
-//! Run with `cargo bench -p tailor-collide --bench ratios` (`TAILOR_BENCH_1M=1` adds 1M).
+//! Run with `cargo bench -p tailor-collide --bench ratios` (`TAILOR_BENCH_1M=1` adds 1M); an
+//! argument after `--` runs only the operations whose name contains it.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -13,11 +18,13 @@ mod shapes;
 use std::hint::black_box;
 use std::time::Instant;
 
+use common::Mesh;
 use parry3d_f64::partitioning::BvhWorkspace;
 use parry3d_f64::query::PointQuery;
+use parry3d_f64::shape::TriMesh;
 use rayon::prelude::*;
-use shapes::{SHAPES, glam, parry, shape, sizes, tailor, waving_sheet};
-use tailor_collide::Point;
+use shapes::{SHAPES, glam, parry, shape, sizes, tailor};
+use tailor_collide::{Hierarchy, Point};
 
 /// The fastest of `runs` alternating runs of `ours` and `theirs`, in milliseconds.
 fn fastest(runs: usize, mut ours: impl FnMut(), mut theirs: impl FnMut()) -> (f64, f64) {
@@ -31,9 +38,23 @@ fn fastest(runs: usize, mut ours: impl FnMut(), mut theirs: impl FnMut()) -> (f6
     })
 }
 
-fn report(what: &str, triangles: usize, (ours, theirs): (f64, f64)) {
+/// Whether the operation named `what` is to run: every one, or those whose name contains the
+/// first argument that is not a flag (`cargo bench --bench ratios -- "self impacts"`).
+fn wanted(what: &str) -> bool {
+    std::env::args()
+        .skip(1)
+        .find(|a| !a.starts_with("--"))
+        .is_none_or(|filter| what.contains(&filter))
+}
+
+/// Times `ours` against `theirs` (see [`fastest`]) when `what` is wanted, and prints a line.
+fn measure(what: &str, triangles: usize, runs: usize, ours: impl FnMut(), theirs: impl FnMut()) {
+    if !wanted(what) {
+        return;
+    }
+    let (ours, theirs) = fastest(runs, ours, theirs);
     println!(
-        "{what:24} {triangles:>8}  tailor {ours:10.3} ms  parry {theirs:10.3} ms  parry/tailor {:6.2}",
+        "{what:26} {triangles:>8}  tailor {ours:10.3} ms  parry {theirs:10.3} ms  parry/tailor {:6.2}",
         theirs / ours
     );
 }
@@ -41,54 +62,20 @@ fn report(what: &str, triangles: usize, (ours, theirs): (f64, f64)) {
 fn main() {
     for triangles in sizes() {
         let runs = if triangles >= 1_000_000 { 5 } else { 20 };
-        let (m, [f0, f1]) = waving_sheet(triangles);
-        let build = fastest(
-            runs.min(10),
-            || drop(black_box(tailor(&m, &f0))),
-            || drop(black_box(parry(&m, &f0))),
-        );
-        report("build", triangles, build);
-
-        let (mut h, mut mesh) = (tailor(&m, &f0), parry(&m, &f0));
-        let frames = [&f0, &f1];
-        let glam_frames = [glam(&f0), glam(&f1)];
-        let (mut i, mut j) = (0, 0);
-        let refit = fastest(
-            5 * runs,
-            || {
-                i ^= 1;
-                h.refit(frames[i], 0.0).unwrap();
-            },
-            || {
-                j ^= 1;
-                mesh.set_vertices(&glam_frames[j]);
-            },
-        );
-        report("refit", triangles, refit);
-
-        h.refit(&f1, 0.0).unwrap();
-        mesh.set_vertices(&glam_frames[1]);
-        let queries: Vec<Point> = f1
-            .iter()
-            .map(|p| Point::new(p.x, p.y, p.z + 0.01))
-            .collect();
-        let glam_queries = glam(&queries);
-        let proximity = fastest(
-            runs,
-            || drop(black_box(h.closest_points(&queries, 0.05).unwrap())),
-            || {
-                let projections: Vec<_> = glam_queries
-                    .par_iter()
-                    .map(|&p| mesh.project_local_point_with_max_dist(p, false, 0.05))
-                    .collect();
-                drop(black_box(projections));
-            },
-        );
-        report("proximity", triangles, proximity);
-
         for name in SHAPES {
             let (m, [f0, f1]) = shape(name, triangles);
-            let (mut h, mesh) = (tailor(&m, &f0), parry(&m, &f1));
+            let (mut h, mut mesh) = (tailor(&m, &f0), parry(&m, &f0));
+            if wanted("memory") {
+                println!(
+                    "memory {name:19} {:>8}  tailor {:10.1} bytes per face",
+                    h.face_count(),
+                    h.memory_bytes() as f64 / h.face_count() as f64
+                );
+            }
+            if name != "rolled" {
+                static_queries(name, triangles, runs, &m, [&f0, &f1], &mut h, &mut mesh);
+            }
+            mesh.set_vertices(&glam(&f1));
             let mut workspace = BvhWorkspace::default();
             let mut traverse = || {
                 let mut pairs = 0usize;
@@ -97,15 +84,89 @@ fn main() {
                 black_box(pairs);
             };
             h.refit_swept(&f0, &f1, 0.0).unwrap();
-            let impacts = fastest(runs, || drop(black_box(h.self_impacts())), &mut traverse);
-            report(&format!("self impacts {name}"), triangles, impacts);
+            measure(
+                &format!("self impacts {name}"),
+                triangles,
+                runs,
+                || drop(black_box(h.self_impacts())),
+                &mut traverse,
+            );
             h.refit(&f1, 0.0).unwrap();
-            let crossings = fastest(
+            measure(
+                &format!("self intersections {name}"),
+                triangles,
                 runs,
                 || drop(black_box(h.self_intersections())),
                 &mut traverse,
             );
-            report(&format!("self intersections {name}"), triangles, crossings);
+            if name == "rolled" {
+                measure(
+                    &format!("self proximity {name}"),
+                    triangles,
+                    runs,
+                    || drop(black_box(h.self_proximity(THICKNESS).unwrap())),
+                    &mut traverse,
+                );
+            }
         }
     }
+}
+
+/// Cloth thickness for self-proximity, in metres.
+const THICKNESS: f64 = 0.005;
+
+/// Build, refit and proximity of every vertex (a point 1 cm above it, within 5 cm) on one
+/// deforming mesh.
+fn static_queries(
+    name: &str,
+    triangles: usize,
+    runs: usize,
+    m: &Mesh,
+    frames: [&Vec<Point>; 2],
+    h: &mut Hierarchy,
+    mesh: &mut TriMesh,
+) {
+    let [f0, f1] = frames;
+    measure(
+        &format!("build {name}"),
+        triangles,
+        runs.min(10),
+        || drop(black_box(tailor(m, f0))),
+        || drop(black_box(parry(m, f0))),
+    );
+    let glam_frames = [glam(f0), glam(f1)];
+    let (mut i, mut j) = (0, 0);
+    measure(
+        &format!("refit {name}"),
+        triangles,
+        5 * runs,
+        || {
+            i ^= 1;
+            h.refit(frames[i], 0.0).unwrap();
+        },
+        || {
+            j ^= 1;
+            mesh.set_vertices(&glam_frames[j]);
+        },
+    );
+    h.refit(f1, 0.0).unwrap();
+    mesh.set_vertices(&glam_frames[1]);
+    let queries: Vec<Point> = f1
+        .iter()
+        .map(|p| Point::new(p.x, p.y, p.z + 0.01))
+        .collect();
+    let glam_queries = glam(&queries);
+    measure(
+        &format!("proximity {name}"),
+        triangles,
+        runs,
+        || drop(black_box(h.closest_points(&queries, 0.05).unwrap())),
+        || {
+            let projections: Vec<_> = glam_queries
+                .par_iter()
+                .map(|&p| mesh.project_local_point_with_max_dist(p, false, 0.05))
+                .collect();
+            drop(black_box(projections));
+        },
+    );
 }

@@ -16,6 +16,18 @@
 //! `t = 0` or when a vertex crosses the line of an edge, so those times are the candidates,
 //! with the collinear case (a vertex crossing an edge's end) one level further down. A zero-area
 //! triangle at the contact time is tested as its three edges.
+//!
+//! Most pairs the traversal hands over cannot touch, and two filters reject them before any
+//! root is sought, each only where the exact test would reject too, so the answers are the
+//! same bits with or without them: the swept boxes of the two primitives are apart along an
+//! axis by more than the touching tolerance (Bridson et al. box every primitive over the step),
+//! or the cubic's Bernstein coefficients on `[0, 1]` all have one sign, so the four points
+//! never become coplanar (the coplanarity filter of Tang, Manocha & Tong, "Fast continuous
+//! collision detection using deforming non-penetration filters", I3D 2010).
+//! Candidate times live on the stack and are tested in ascending order as the bisection finds
+//! them, so a pair that touches at its first root is not bisected further.
+
+use std::ops::ControlFlow;
 
 use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::query::PointQueryWithLocation;
@@ -71,6 +83,14 @@ fn at(p: Path, t: f64) -> DVec3 {
 
 /// [`vertex_triangle_impact`] on glam vectors.
 pub(crate) fn vertex_triangle(p: Path, tri: [Path; 3]) -> Option<(f64, [f64; 3])> {
+    if apart(&[p, tri[0], tri[1], tri[2]], 1) {
+        return None;
+    }
+    vertex_triangle_exact(p, tri)
+}
+
+/// [`vertex_triangle`] without the box filter.
+fn vertex_triangle_exact(p: Path, tri: [Path; 3]) -> Option<(f64, [f64; 3])> {
     let scale = size(&[p, tri[0], tri[1], tri[2]]);
     let touch = TOUCH * scale;
     let test = |t: f64| {
@@ -81,20 +101,26 @@ pub(crate) fn vertex_triangle(p: Path, tri: [Path; 3]) -> Option<(f64, [f64; 3])
             .map(|(_, w)| (t, w))
     };
     let cubic = coplanarity(tri[0], tri[1], tri[2], p);
-    let mut times = Vec::new();
-    if is_flat(&cubic, scale.powi(3)) {
-        times.push(0.0);
-        for i in 0..3 {
-            vertex_line_times(p, [tri[i], tri[(i + 1) % 3]], scale, &mut times);
-        }
-    } else {
-        roots_in_unit(&cubic, &mut times);
+    if !is_flat(&cubic, scale.powi(3)) {
+        return first_root(&cubic, test);
     }
-    earliest(times, test)
+    let mut times = Candidates::new(0.0);
+    for i in 0..3 {
+        vertex_line_times(p, [tri[i], tri[(i + 1) % 3]], scale, &mut times);
+    }
+    times.earliest(test)
 }
 
 /// [`edge_edge_impact`] on glam vectors.
 pub(crate) fn edge_edge(e: [Path; 2], f: [Path; 2]) -> Option<(f64, [f64; 2])> {
+    if apart(&[e[0], e[1], f[0], f[1]], 2) {
+        return None;
+    }
+    edge_edge_exact(e, f)
+}
+
+/// [`edge_edge`] without the box filter.
+fn edge_edge_exact(e: [Path; 2], f: [Path; 2]) -> Option<(f64, [f64; 2])> {
     let scale = size(&[e[0], e[1], f[0], f[1]]);
     let touch = TOUCH * scale;
     let test = |t: f64| {
@@ -102,32 +128,87 @@ pub(crate) fn edge_edge(e: [Path; 2], f: [Path; 2]) -> Option<(f64, [f64; 2])> {
         (d <= touch).then_some((t, [s, u]))
     };
     let cubic = coplanarity(e[0], e[1], f[0], f[1]);
-    let mut times = Vec::new();
-    if is_flat(&cubic, scale.powi(3)) {
-        times.push(0.0);
-        for (p, segment) in [(e[0], f), (e[1], f), (f[0], e), (f[1], e)] {
-            vertex_line_times(p, segment, scale, &mut times);
-        }
-    } else {
-        roots_in_unit(&cubic, &mut times);
+    if !is_flat(&cubic, scale.powi(3)) {
+        return first_root(&cubic, test);
     }
-    earliest(times, test)
+    let mut times = Candidates::new(0.0);
+    for (p, segment) in [(e[0], f), (e[1], f), (f[0], e), (f[1], e)] {
+        vertex_line_times(p, segment, scale, &mut times);
+    }
+    times.earliest(test)
 }
 
-/// The first candidate time (ascending) at which `test` finds contact.
-fn earliest<R>(mut times: Vec<f64>, test: impl Fn(f64) -> Option<R>) -> Option<R> {
-    times.sort_unstable_by(f64::total_cmp);
-    times.into_iter().find_map(test)
+/// Whether the swept boxes of the first `split` paths and of the rest are farther apart along
+/// some axis than any two points the exact tests would call touching: then no candidate time
+/// can pass them (a separating axis among the coordinate axes, per pair of primitives).
+///
+/// The tests accept points within [`TOUCH`] times [`size`] of each other, and [`size`] is at
+/// most the diagonal of the box around all the points, itself at most the sum of that box's
+/// extents. Computing a point at a time `t` and its distance to a triangle or a segment
+/// rounds by a few units in the last place of the largest coordinate involved; 64 of them are
+/// added, so the filter only ever rejects pairs that the exact tests reject.
+fn apart<const N: usize>(paths: &[Path; N], split: usize) -> bool {
+    let bound = |paths: &[Path]| {
+        let points = paths.iter().flatten();
+        let lo = points.clone().fold(DVec3::INFINITY, |m, &x| m.min(x));
+        let hi = points.fold(DVec3::NEG_INFINITY, |m, &x| m.max(x));
+        (lo, hi)
+    };
+    let ((alo, ahi), (blo, bhi)) = (bound(&paths[..split]), bound(&paths[split..]));
+    let (lo, hi) = (alo.min(blo), ahi.max(bhi));
+    let extent = (hi - lo).element_sum();
+    let magnitude = lo.abs().max(hi.abs()).max_element();
+    let slack = TOUCH * extent + 64.0 * f64::EPSILON * magnitude;
+    let gap = (blo - ahi).max(alo - bhi);
+    gap.max_element() > slack
+}
+
+/// The first root of `cubic` in `[0, 1]` (grazes included, see [`roots_in_unit`]) at which
+/// `test` finds contact.
+fn first_root<R>(cubic: &[f64; 4], test: impl Fn(f64) -> Option<R>) -> Option<R> {
+    roots_in_unit(cubic, |t| match test(t) {
+        Some(r) => ControlFlow::Break(r),
+        None => ControlFlow::Continue(()),
+    })
+    .break_value()
+}
+
+/// The candidate times of a motion that stays coplanar, on the stack: `t = 0` and the roots of
+/// [`vertex_line_times`] for up to four point–segment pairs, at most 18 each.
+struct Candidates {
+    times: [f64; 4 * 18 + 1],
+    len: usize,
+}
+
+impl Candidates {
+    fn new(first: f64) -> Self {
+        let mut times = [0.0; 4 * 18 + 1];
+        times[0] = first;
+        Self { times, len: 1 }
+    }
+
+    fn push(&mut self, t: f64) {
+        self.times[self.len] = t;
+        self.len += 1;
+    }
+
+    /// The first candidate (ascending) at which `test` finds contact.
+    fn earliest<R>(mut self, test: impl Fn(f64) -> Option<R>) -> Option<R> {
+        let times = &mut self.times[..self.len];
+        times.sort_unstable_by(f64::total_cmp);
+        times.iter().find_map(|&t| test(t))
+    }
 }
 
 /// The largest distance between the points involved, start or end, from the first one's start.
 fn size(paths: &[Path]) -> f64 {
     let origin = paths[0][0];
-    paths
+    let farthest = paths
         .iter()
         .flatten()
-        .map(|&x| (x - origin).length())
-        .fold(f64::MIN_POSITIVE, f64::max)
+        .map(|&x| (x - origin).length_squared())
+        .fold(0.0, f64::max);
+    farthest.sqrt().max(f64::MIN_POSITIVE)
 }
 
 fn is_flat(poly: &[f64], scale: f64) -> bool {
@@ -152,48 +233,97 @@ fn coplanarity(a: Path, b: Path, c: Path, d: Path) -> [f64; 4] {
 /// Candidate times at which moving point `p` crosses the line of moving segment `s`: roots of
 /// the components of `(s1 - s0) × (p - s0)`; when that vanishes identically (collinear motion),
 /// the times `p` passes either end.
-fn vertex_line_times(p: Path, s: [Path; 2], scale: f64, times: &mut Vec<f64>) {
+fn vertex_line_times(p: Path, s: [Path; 2], scale: f64, times: &mut Candidates) {
     let rel = |x: Path| (x[0] - s[0][0], (x[1] - x[0]) - (s[0][1] - s[0][0]));
     let ((e0, de), (w0, dw)) = (rel(s[1]), rel(p));
     let coefficients = [e0.cross(w0), e0.cross(dw) + de.cross(w0), de.cross(dw)];
     let components = |c: [DVec3; 3]| (0..3).map(move |k| [c[0][k], c[1][k], c[2][k], 0.0]);
+    let mut push = |poly: [f64; 4]| {
+        let _ = roots_in_unit::<()>(&poly, |t| {
+            times.push(t);
+            ControlFlow::Continue(())
+        });
+    };
     if components(coefficients).all(|poly| is_flat(&poly, scale * scale)) {
         for end in s {
             let (x0, dx) = (p[0] - end[0], (p[1] - p[0]) - (end[1] - end[0]));
-            for poly in components([x0, dx, DVec3::ZERO]) {
-                roots_in_unit(&poly, times);
-            }
+            components([x0, dx, DVec3::ZERO]).for_each(&mut push);
         }
     } else {
-        for poly in components(coefficients) {
-            roots_in_unit(&poly, times);
-        }
+        components(coefficients).for_each(&mut push);
     }
 }
 
-/// Pushes the roots in `[0, 1]` of the polynomial `poly` (ascending powers, degree ≤ 3), and
-/// the places where it grazes zero without changing sign. An identically zero polynomial has
-/// no isolated roots and pushes nothing.
-pub(crate) fn roots_in_unit(poly: &[f64; 4], times: &mut Vec<f64>) {
+/// Calls `each` on the roots in `[0, 1]` of the polynomial `poly` (ascending powers, degree
+/// ≤ 3) and on the places where it grazes zero without changing sign, in ascending order,
+/// until `each` breaks. An identically zero polynomial has no isolated roots and gives nothing.
+///
+/// Most pairs of primitives never become coplanar, and their cubic keeps one sign over the
+/// step: [`keeps_sign`] proves it from four numbers before any root is sought.
+fn roots_in_unit<B>(poly: &[f64; 4], each: impl FnMut(f64) -> ControlFlow<B>) -> ControlFlow<B> {
+    if keeps_sign(poly) {
+        return ControlFlow::Continue(());
+    }
+    isolate_roots(poly, each)
+}
+
+/// Relative size, against the largest coefficient, below which [`isolate_roots`] counts a
+/// value of the polynomial as grazing zero.
+const GRAZE: f64 = 1e-14;
+
+/// Whether `poly` stays farther from zero than [`GRAZE`] allows over all of `[0, 1]`, so that
+/// [`isolate_roots`] would find nothing.
+///
+/// On `[0, 1]` a cubic is a convex combination of its four Bernstein coefficients
+/// `c0`, `c0 + c1/3`, `c0 + (2 c1 + c2)/3` and `c0 + c1 + c2 + c3` (Farouki & Rajan 1987), so
+/// it lies between the smallest and the largest of them. When they all have one sign and are
+/// larger than the grazing tolerance plus the rounding of computing them and of evaluating the
+/// polynomial by Horner's rule (each a few units in the last place of the sum of the
+/// coefficients' magnitudes, bounded here by 64 of the largest one's), no evaluation in
+/// `[0, 1]` can change sign or graze.
+fn keeps_sign(poly: &[f64; 4]) -> bool {
+    let [c0, c1, c2, c3] = *poly;
+    let scale = poly.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    let bernstein = [
+        c0,
+        c0 + c1 / 3.0,
+        c0 + (2.0 * c1 + c2) / 3.0,
+        c0 + c1 + c2 + c3,
+    ];
+    let margin = (GRAZE + 64.0 * f64::EPSILON) * scale;
+    bernstein.iter().all(|&b| b > margin) || bernstein.iter().all(|&b| b < -margin)
+}
+
+/// The roots and grazes of [`roots_in_unit`], found without shortcuts: the polynomial is split
+/// at the roots of its derivative into monotone pieces; a cut where it (nearly) vanishes is a
+/// graze, and a piece whose ends differ in sign is bisected to machine precision.
+fn isolate_roots<B>(
+    poly: &[f64; 4],
+    mut each: impl FnMut(f64) -> ControlFlow<B>,
+) -> ControlFlow<B> {
     let scale = poly.iter().fold(0.0f64, |m, c| m.max(c.abs()));
     if scale == 0.0 {
-        return;
+        return ControlFlow::Continue(());
     }
     let eval = |t: f64| ((poly[3] * t + poly[2]) * t + poly[1]) * t + poly[0];
-    let mut cuts = vec![0.0];
-    cuts.extend(
-        quadratic_roots(3.0 * poly[3], 2.0 * poly[2], poly[1]).filter(|t| *t > 0.0 && *t < 1.0),
-    );
-    cuts.push(1.0);
-    cuts.sort_unstable_by(f64::total_cmp);
-    let graze = 1e-14 * scale;
-    for &t in &cuts {
-        if eval(t).abs() <= graze {
-            times.push(t);
+    let (mut cuts, mut count) = ([0.0, 1.0, 1.0, 1.0], 1);
+    for t in quadratic_roots(3.0 * poly[3], 2.0 * poly[2], poly[1]) {
+        if t > 0.0 && t < 1.0 {
+            cuts[count] = t;
+            count += 1;
         }
     }
-    for piece in cuts.windows(2) {
-        let (mut lo, mut hi) = (piece[0], piece[1]);
+    let cuts = &mut cuts[..=count];
+    cuts.sort_unstable_by(f64::total_cmp);
+    let graze = GRAZE * scale;
+    for (i, &t) in cuts.iter().enumerate() {
+        if eval(t).abs() <= graze {
+            each(t)?;
+        }
+        let Some(&next) = cuts.get(i + 1) else {
+            break;
+        };
+        let (mut lo, mut hi) = (t, next);
         let (flo, fhi) = (eval(lo), eval(hi));
         if flo == 0.0 || fhi == 0.0 || (flo > 0.0) == (fhi > 0.0) {
             continue;
@@ -209,8 +339,9 @@ pub(crate) fn roots_in_unit(poly: &[f64; 4], times: &mut Vec<f64>) {
                 hi = mid;
             }
         }
-        times.push(lo);
+        each(lo)?;
     }
+    ControlFlow::Continue(())
 }
 
 /// Real roots of `a t² + b t + c` (fewer when degenerate), computed without cancellation.
@@ -397,24 +528,202 @@ mod tests {
         assert_eq!(edge_edge(e, h), None);
     }
 
+    /// Every root and graze [`roots_in_unit`] reports, in its order.
+    fn roots(poly: [f64; 4]) -> Vec<f64> {
+        let mut r = Vec::new();
+        let _ = roots_in_unit::<()>(&poly, |t| {
+            r.push(t);
+            ControlFlow::Continue(())
+        });
+        r
+    }
+
     #[test]
     fn roots_of_known_cubics() {
-        let mut r = Vec::new();
         // (t - 0.2)(t - 0.5)(t - 0.9) = t³ - 1.6t² + 0.73t - 0.09.
-        roots_in_unit(&[-0.09, 0.73, -1.6, 1.0], &mut r);
-        r.sort_unstable_by(f64::total_cmp);
+        let r = roots([-0.09, 0.73, -1.6, 1.0]);
         assert_eq!(r.len(), 3);
         for (got, want) in r.iter().zip([0.2, 0.5, 0.9]) {
             assert!((got - want).abs() < 1e-12, "{got}");
         }
         // A double root at t = 0.5 (grazing): (t - 0.5)² = t² - t + 0.25.
-        r.clear();
-        roots_in_unit(&[0.25, -1.0, 1.0, 0.0], &mut r);
-        assert_eq!(r, vec![0.5]);
+        assert_eq!(roots([0.25, -1.0, 1.0, 0.0]), vec![0.5]);
         // No root in [0, 1], and the zero polynomial.
-        r.clear();
-        roots_in_unit(&[1.0, 0.0, 1.0, 0.0], &mut r);
-        roots_in_unit(&[0.0; 4], &mut r);
-        assert!(r.is_empty());
+        assert!(roots([1.0, 0.0, 1.0, 0.0]).is_empty());
+        assert!(roots([0.0; 4]).is_empty());
+        // A break stops the search at the first root.
+        let first = roots_in_unit(&[-0.09, 0.73, -1.6, 1.0], ControlFlow::Break);
+        assert!(first.break_value().is_some_and(|t| (t - 0.2).abs() < 1e-12));
+    }
+
+    /// A small deterministic generator (xorshift).
+    struct Rng(u64);
+
+    impl Rng {
+        /// Uniform in `[-1, 1)`.
+        fn signed(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+
+        fn vector(&mut self) -> DVec3 {
+            DVec3::new(self.signed(), self.signed(), self.signed())
+        }
+    }
+
+    #[test]
+    fn sign_test_never_hides_a_root_or_graze() {
+        // Cubics with roots just outside [0, 1], at its ends, grazing inside it and nowhere
+        // near it, at scales from 1e-30 to 1e30: whenever the Bernstein test says the sign is
+        // kept, the bisection finds nothing either.
+        let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+        let mut kept = 0;
+        for i in 0..20_000 {
+            let near = |x: f64| [0.0, 1.0][i % 2] + x * 10f64.powi(-(i as i32 % 17));
+            let (r0, r1, r2) = (near(rng.signed()), near(rng.signed()), rng.signed() * 3.0);
+            let lead = 10f64.powi(i as i32 % 61 - 30) * rng.signed();
+            // lead (t - r0)(t - r1)(t - r2), plus an offset that may lift it off zero.
+            let mut poly = [
+                -lead * r0 * r1 * r2,
+                lead * (r0 * r1 + r1 * r2 + r0 * r2),
+                -lead * (r0 + r1 + r2),
+                lead,
+            ];
+            if i % 3 == 0 {
+                poly[3] = 0.0;
+            }
+            poly[0] += lead * 1e-13 * rng.signed() * (i % 5) as f64;
+            if keeps_sign(&poly) {
+                kept += 1;
+                let mut found = Vec::new();
+                let _ = isolate_roots::<()>(&poly, |t| {
+                    found.push(t);
+                    ControlFlow::Continue(())
+                });
+                assert!(found.is_empty(), "{poly:?}: {found:?}");
+            }
+        }
+        assert!(kept > 1000, "{kept}");
+        // A cubic that merely comes close to zero inside the step is not dismissed.
+        assert!(!keeps_sign(&[1e-15, -1.0, 1.0, 0.0]));
+    }
+
+    /// A random path within `scale` of `offset`.
+    fn random_path(rng: &mut Rng, offset: DVec3, scale: f64) -> Path {
+        let a = offset + rng.vector() * scale;
+        [a, a + rng.vector() * scale]
+    }
+
+    /// Two paths beyond the points of `first` along x: at the time (0 or 1) when `first`
+    /// reaches its largest x, at its point `top`, one of them is `distance` from `top` along
+    /// the unit direction `u` (`u.x > 0`) and the other on the same ray farther out; at the
+    /// other time both are farther out along x as well.
+    fn beyond(rng: &mut Rng, first: &[Path], u: DVec3, distance: f64, scale: f64) -> [Path; 2] {
+        let (k, end) = (0..first.len())
+            .flat_map(|k| [(k, 0), (k, 1)])
+            .max_by(|x, y| first[x.0][x.1].x.total_cmp(&first[y.0][y.1].x))
+            .unwrap();
+        let top = first[k][end];
+        let near = top + u * distance;
+        let ray = near + u * (0.3 * scale);
+        let out = |x: DVec3| DVec3::new(near.x + (x.x - top.x).abs(), x.y, x.z);
+        let (a, b) = (
+            out(top + rng.vector() * scale),
+            out(top + rng.vector() * scale),
+        );
+        if end == 0 {
+            [[near, a], [ray, b]]
+        } else {
+            [[a, near], [b, ray]]
+        }
+    }
+
+    #[test]
+    fn box_filter_rejects_only_what_the_exact_tests_reject() {
+        // The second primitive lies beyond the first one's swept box along x, touching it
+        // within about the tolerance, in its plane, at the time the first one reaches that
+        // box's face: sometimes touching, sometimes apart, sometimes neither. Whenever the
+        // filter says apart, the exact tests find nothing; the filtered answers are the exact
+        // ones, bit for bit.
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let (mut apart_count, mut hits) = (0, 0);
+        for i in 0..20_000i32 {
+            let offset = DVec3::splat(1000.0) * (i % 2) as f64;
+            let scale = 10f64.powi(i % 7 - 3);
+            let distance = scale * 10f64.powf(-9.5 + 1.5 * rng.signed());
+            let tri = [0; 3].map(|_| random_path(&mut rng, offset, scale));
+            let edge = [0; 2].map(|_| random_path(&mut rng, offset, scale));
+            let time = usize::from(
+                tri[0][1].x.max(tri[1][1].x).max(tri[2][1].x)
+                    > tri[0][0].x.max(tri[1][0].x).max(tri[2][0].x),
+            );
+            let [a, b, c] = tri.map(|p| p[time]);
+            let n = (b - a).cross(c - a).normalize();
+            if n.x * n.x < 0.9 {
+                let u = (DVec3::X - n * n.x).normalize();
+                let [p, _] = beyond(&mut rng, &tri, u, distance, scale);
+                let exact = vertex_triangle_exact(p, tri);
+                hits += usize::from(exact.is_some());
+                if apart(&[p, tri[0], tri[1], tri[2]], 1) {
+                    apart_count += 1;
+                    assert_eq!(exact, None, "{p:?} {tri:?}");
+                }
+                assert_eq!(vertex_triangle(p, tri), exact);
+            }
+            let u = (DVec3::X + rng.vector() * 0.5).normalize();
+            let f = beyond(&mut rng, &edge, u, distance, scale);
+            let exact = edge_edge_exact(edge, f);
+            hits += usize::from(exact.is_some());
+            if apart(&[edge[0], edge[1], f[0], f[1]], 2) {
+                apart_count += 1;
+                assert_eq!(exact, None, "{edge:?} {f:?}");
+            }
+            assert_eq!(edge_edge(edge, f), exact);
+        }
+        assert!(
+            hits > 1000 && apart_count > 1000,
+            "{hits} hits, {apart_count} apart"
+        );
+    }
+
+    #[test]
+    fn filters_keep_fast_grazing_and_coplanar_contacts() {
+        // A vertex crossing the whole triangle's box in one step: its own box spans it.
+        let fast = moving(v(0.2, 0.25, 1e6), v(0.0, 0.0, -2e6));
+        let (t, _) = vertex_triangle(fast, floor()).unwrap();
+        assert!((t - 0.5).abs() < 1e-9, "{t}");
+        // A vertex that only touches the triangle's plane at the end of the step: the cubic
+        // reaches zero at t = 1 and the Bernstein test must not dismiss it.
+        let landing = moving(v(0.2, 0.25, 0.3), v(0.0, 0.0, -0.3));
+        assert_eq!(vertex_triangle(landing, floor()).map(|r| r.0), Some(1.0));
+        // Resting exactly on the triangle while both translate: contact at t = 0.
+        let d = v(0.3, -0.2, 0.0);
+        let tri = floor().map(|c| moving(c[0], d));
+        assert_eq!(
+            vertex_triangle(moving(v(0.2, 0.2, 0.0), d), tri).map(|r| r.0),
+            Some(0.0)
+        );
+        // An edge falling past another's end within the tolerance, at the box filter's edge.
+        let e = [still(v(0.0, 0.0, 0.0)), still(v(1.0, 0.0, 0.0))];
+        let down = v(0.0, 0.0, -2.0);
+        let f = [
+            moving(v(1.0 + 5e-11, 0.0, 1.0), down),
+            moving(v(1.0 + 5e-11, 1.0, 1.0), down),
+        ];
+        assert!(!apart(&[e[0], e[1], f[0], f[1]], 2));
+        let (t, [s, u]) = edge_edge(e, f).unwrap();
+        assert!(
+            (t - 0.5).abs() < 1e-9 && s == 1.0 && u == 0.0,
+            "{t} {s} {u}"
+        );
+        // Coplanar edges closing in within their plane.
+        let g = [
+            moving(v(0.5, 1.0, 0.0), v(0.0, -2.0, 0.0)),
+            moving(v(0.5, 2.0, 0.0), v(0.0, -2.0, 0.0)),
+        ];
+        let (t, _) = edge_edge(e, g).unwrap();
+        assert!((t - 0.5).abs() < 1e-9, "{t}");
     }
 }

@@ -17,7 +17,8 @@
 //! vector area), taken relative to a boundary vertex to keep its digits. Any direction would be
 //! sound, since every triangle is then checked against it. The test runs lazily, top-down, on
 //! the nodes the traversal visits: a smooth sheet is cleared by one linear pass at the root,
-//! and a node that fails usually fails on its first few triangles.
+//! and a node that fails usually fails on its first few triangles, or before any of them on
+//! its contour, which is checked first because it is shorter.
 //!
 //! Over a step every vertex moves linearly, so a triangle normal
 //! `n(t) = (b(t) - a(t)) × (c(t) - a(t))` is quadratic in `t`; in the Bernstein basis its three
@@ -102,22 +103,30 @@ impl NormalCones {
             d > 0.0 && d * d > cos2 * n.length_squared() * axis_len2
         };
         let seen = |t: usize| self.all_of_triangle(h, t, |n| front(&n));
-        // The root holds every triangle: check them in memory order.
+        // The root holds every triangle: check them in memory order, a chunk per task, each
+        // chunk a plain loop.
         let all_seen = || {
             if faces.len() == h.face_count() {
-                (0..h.triangle_count())
+                let triangles = h.triangle_count();
+                (0..triangles.div_ceil(CHUNK))
                     .into_par_iter()
-                    .with_min_len(CHUNK)
-                    .all(seen)
+                    .all(|c| (c * CHUNK..triangles.min((c + 1) * CHUNK)).all(seen))
             } else {
-                faces.par_chunks(CHUNK).all(|chunk| {
+                let chunk_seen = |chunk: &[u32]| {
                     chunk
                         .iter()
                         .all(|&f| h.topology.face_triangles(f).all(seen))
-                })
+                };
+                if faces.len() <= CHUNK {
+                    chunk_seen(faces)
+                } else {
+                    faces.par_chunks(CHUNK).all(chunk_seen)
+                }
             }
         };
-        axis_len2 > 0.0 && all_seen() && contour_does_not_fold(h, node, axis.normalize())
+        // The contour costs a pass over the boundary, the normals one over the faces: the
+        // cheaper test goes first.
+        axis_len2 > 0.0 && contour_does_not_fold(h, node, axis.normalize()) && all_seen()
     }
 }
 

@@ -11,6 +11,8 @@
 //! kept out of the body's triangles ([`Hierarchy::vertex_impacts_with`]): the same traversal
 //! with the vertex–triangle tests alone.
 
+use parry3d_f64::math::Vector as DVec3;
+
 use crate::ccd::{CONTACT_SLACK, edge_edge, vertex_triangle};
 use crate::cones::NormalCones;
 use crate::hierarchy::Hierarchy;
@@ -166,14 +168,15 @@ fn vertices_against_face<T>(
     wrap: fn(VertexTriangleImpact) -> T,
     out: &mut Vec<T>,
 ) {
+    let (vertex_end, triangle_end) = (hv.end(), ht.end());
     for &v in hv.topology.owned_vertices(f) {
-        let path = [hv.start[v as usize], hv.end()[v as usize]];
+        let path = [hv.start[v as usize], vertex_end[v as usize]];
         for t in ht.topology.face_triangles(g) {
             let corners = ht.topology.triangles[t];
             if same_mesh && corners.contains(&v) {
                 continue;
             }
-            let triangle = corners.map(|c| [ht.start[c as usize], ht.end()[c as usize]]);
+            let triangle = corners.map(|c| [ht.start[c as usize], triangle_end[c as usize]]);
             if let Some((time, barycentric)) = vertex_triangle(path, triangle) {
                 out.push(wrap(VertexTriangleImpact {
                     vertex: v,
@@ -197,6 +200,7 @@ fn edges_against_edges(
     out: &mut Vec<Found>,
 ) {
     let (mine, theirs) = (ha.topology.owned_edges(f), hb.topology.owned_edges(g));
+    let (ends_a, ends_b) = ((&ha.start[..], ha.end()), (&hb.start[..], hb.end()));
     for (i, &ea) in mine.iter().enumerate() {
         let theirs = if same_mesh && f == g {
             &theirs[i + 1..]
@@ -213,14 +217,15 @@ fn edges_against_edges(
             }
             // Within one mesh the lower edge goes first, so the same pair always gives the
             // same bits whichever face owns which edge.
-            let (a, b, ha, hb) = if same_mesh && b < a {
-                (b, a, hb, ha)
+            let (a, b, ends_a, ends_b) = if same_mesh && b < a {
+                (b, a, ends_b, ends_a)
             } else {
-                (a, b, ha, hb)
+                (a, b, ends_a, ends_b)
             };
-            let path = |h: &Hierarchy, v: u32| [h.start[v as usize], h.end()[v as usize]];
+            let path =
+                |(start, end): (&[DVec3], &[DVec3]), v: u32| [start[v as usize], end[v as usize]];
             if let Some((time, parameters)) =
-                edge_edge(a.map(|v| path(ha, v)), b.map(|v| path(hb, v)))
+                edge_edge(a.map(|v| path(ends_a, v)), b.map(|v| path(ends_b, v)))
             {
                 let edges = [a, b];
                 out.push(Found::EdgeEdge(EdgeEdgeImpact {

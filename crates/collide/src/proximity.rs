@@ -18,6 +18,9 @@
 //! triangles are rare, so the search ignores them and runs again without them only when one of
 //! them won.
 //!
+//! A vertex of the mesh asking for the faces near it, excluding its own, climbs the same way
+//! from the face that owns it, which lies next to it and is excluded anyway.
+//!
 //! Self-proximity does not use the normal cones: they prove that a region cannot *touch*
 //! itself, not that its vertices stay farther than a distance from its other faces (a finely
 //! tessellated flat sheet has both), so only the exact zero-thickness queries cull with them.
@@ -105,8 +108,11 @@ impl Neighbours {
             .map(|(counts, hits, _)| (counts, hits))
             .collect();
         self.offsets.clear();
+        self.offsets.reserve(count + 1);
         self.offsets.push(0);
         self.hits.clear();
+        self.hits
+            .reserve(runs.iter().map(|(_, hits)| hits.len()).sum());
         for (counts, hits) in runs {
             for c in counts {
                 let last = *self.offsets.last().unwrap_or(&0);
@@ -207,7 +213,8 @@ impl Hierarchy {
         check_distance("distance", distance)?;
         check_queries(queries)?;
         out.fill(queries.len(), |i, stack, hits| {
-            self.within(to_glam(&queries[i]), distance, |_| false, stack, hits);
+            let q = to_glam(&queries[i]);
+            self.within(q, distance, None, |_| false, stack, hits);
         });
         Ok(())
     }
@@ -231,9 +238,18 @@ impl Hierarchy {
     ) -> Result<(), CollideError> {
         check_distance("distance", distance)?;
         out.fill(self.vertex_count(), |v, stack, hits| {
+            let owner = self.topology.vertex_owner[v];
+            let seed = (owner != u32::MAX).then_some(owner);
             let v = v as u32;
             let incident = |f: u32| self.topology.face(f).contains(&v);
-            self.within(self.end()[v as usize], distance, incident, stack, hits);
+            self.within(
+                self.end()[v as usize],
+                distance,
+                seed,
+                incident,
+                stack,
+                hits,
+            );
         });
         Ok(())
     }
@@ -294,17 +310,19 @@ impl Hierarchy {
         }
     }
 
-    /// Appends every face within `distance` of `q` that is not `excluded` to `hits`.
+    /// Appends every face within `distance` of `q` that is not `excluded` to `hits`; the walk
+    /// climbs from `seed`, an excluded face, when there is one.
     fn within(
         &self,
         q: DVec3,
         distance: f64,
+        seed: Option<u32>,
         excluded: impl Fn(u32) -> bool,
         stack: &mut Stack,
         hits: &mut Vec<Closest>,
     ) {
         let bound = prune_bound(distance);
-        self.visit_near(q, bound, None, stack, |f| {
+        self.visit_near(q, bound, seed, stack, |f| {
             if !excluded(f) {
                 hits.extend(
                     self.closest_on_face(f, q, distance)

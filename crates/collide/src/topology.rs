@@ -29,6 +29,8 @@ pub(crate) struct Topology {
     pub(crate) edge_triangle_count: Vec<u32>,
     /// Pairs of distinct faces sharing an edge, `f < g`, sorted and unique.
     pub(crate) adjacency: Vec<[u32; 2]>,
+    /// The face owning each vertex (the first that uses it), `u32::MAX` for an unused one.
+    pub(crate) vertex_owner: Vec<u32>,
     /// CSR: the vertices each face owns.
     pub(crate) owned_vertex_offsets: Vec<u32>,
     pub(crate) owned_vertices: Vec<u32>,
@@ -125,6 +127,7 @@ impl Topology {
             edges,
             edge_triangle_count,
             adjacency,
+            vertex_owner,
             owned_vertex_offsets,
             owned_vertices,
             owned_edge_offsets,
@@ -142,6 +145,7 @@ impl Topology {
             + heap(&self.edges)
             + heap(&self.edge_triangle_count)
             + heap(&self.adjacency)
+            + heap(&self.vertex_owner)
             + heap(&self.owned_vertex_offsets)
             + heap(&self.owned_vertices)
             + heap(&self.owned_edge_offsets)

@@ -46,6 +46,9 @@ pub(crate) fn self_pairs<T: Send>(
     out
 }
 
+/// A node with its box.
+type Boxed = (u32, Aabb);
+
 /// Visits every pair (leaf of `a`, leaf of `b`) with overlapping boxes, loosened by `slack`.
 pub(crate) fn cross_pairs<T: Send>(
     a: &Hierarchy,
@@ -61,15 +64,17 @@ pub(crate) fn cross_pairs<T: Send>(
         pad: 0.0,
         visit,
     };
-    walk.cross(a.root(), b.root(), &mut out);
+    let root = |h: &Hierarchy| (h.root(), h.node_box(h.root()));
+    walk.cross(root(a), root(b), &mut out);
     out
 }
 
-/// Whether two boxes overlap once each is loosened by `slack` times its diagonal (the contact
-/// tolerance of the exact tests is relative to the size of the features) and together by the
-/// distance `pad` (a proximity query's reach).
+/// Whether two boxes overlap once each is loosened by `slack` times the sum of its extents (at
+/// least its diagonal, without a square root: the contact tolerance of the exact tests is
+/// relative to the size of the features) and together by the distance `pad` (a proximity
+/// query's reach).
 fn overlap(a: &Aabb, b: &Aabb, slack: f64, pad: f64) -> bool {
-    let relative = slack * ((a.maxs - a.mins).length() + (b.maxs - b.mins).length());
+    let relative = slack * ((a.maxs - a.mins).element_sum() + (b.maxs - b.mins).element_sum());
     let pad = DVec3::splat(relative + pad);
     (a.mins - pad).cmple(b.maxs).all() && (b.mins - pad).cmple(a.maxs).all()
 }
@@ -89,19 +94,24 @@ struct Walk<'a, T> {
 }
 
 impl<T: Send> Walk<'_, T> {
-    /// Visits the overlapping leaf pairs below node `a` of `ha` and node `b` of `hb`.
-    fn cross(&self, a: u32, b: u32, out: &mut Vec<T>) {
+    /// Visits the overlapping leaf pairs below node `a` of `ha` and node `b` of `hb`. The
+    /// boxes travel with the nodes: a child's box is read from its parent's record.
+    fn cross(&self, a: Boxed, b: Boxed, out: &mut Vec<T>) {
         let (ha, hb) = (self.ha, self.hb);
-        if !overlap(&ha.node_box(a), &hb.node_box(b), self.slack, self.pad) {
+        if !overlap(&a.1, &b.1, self.slack, self.pad) {
             return;
         }
-        let (size_a, size_b) = (ha.leaf_counts[a as usize], hb.leaf_counts[b as usize]);
-        let (x, y) = match (ha.node_children(a), hb.node_children(b)) {
-            (None, None) => return (self.visit)(a, b, out),
-            (Some([a0, a1]), None) => ((a0, b), (a1, b)),
-            (None, Some([b0, b1])) => ((a, b0), (a, b1)),
-            (Some([a0, a1]), Some(_)) if size_a >= size_b => ((a0, b), (a1, b)),
-            (_, Some([b0, b1])) => ((a, b0), (a, b1)),
+        let (size_a, size_b) = (ha.leaf_counts[a.0 as usize], hb.leaf_counts[b.0 as usize]);
+        // Split the larger side, `a` on ties. A leaf covers one face and an internal node at
+        // least two, so when the larger side is a leaf both are.
+        let (x, y) = if size_a >= size_b
+            && let Some([a0, a1]) = ha.children_boxed(a.0)
+        {
+            ((a0, b), (a1, b))
+        } else if let Some([b0, b1]) = hb.children_boxed(b.0) {
+            ((a, b0), (a, b1))
+        } else {
+            return (self.visit)(a.0, b.0, out);
         };
         if size_a.min(size_b) >= GRAIN / 4 && size_a.max(size_b) >= GRAIN {
             let (mut first, mut second) = rayon::join(
@@ -129,23 +139,23 @@ impl<T: Send> SelfWalk<'_, T> {
         if self.cones.is_some_and(|c| c.cannot_self_collide(h, node)) {
             return;
         }
-        let Some([a, b]) = h.node_children(node) else {
+        let Some([a, b]) = h.children_boxed(node) else {
             if self.same_leaf {
                 (self.walk.visit)(node, node, out);
             }
             return;
         };
         if h.leaf_counts[node as usize] < GRAIN {
-            self.node(a, out);
-            self.node(b, out);
+            self.node(a.0, out);
+            self.node(b.0, out);
             self.walk.cross(a, b, out);
             return;
         }
         let (mut left, (mut right, mut across)) = rayon::join(
-            || collect(|o| self.node(a, o)),
+            || collect(|o| self.node(a.0, o)),
             || {
                 rayon::join(
-                    || collect(|o| self.node(b, o)),
+                    || collect(|o| self.node(b.0, o)),
                     || collect(|o| self.walk.cross(a, b, o)),
                 )
             },

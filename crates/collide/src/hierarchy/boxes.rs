@@ -215,6 +215,15 @@ impl Boxes {
         Aabb::new(lo, hi)
     }
 
+    /// The boxes of the two children of internal node `F + record`, in the order of its
+    /// children: read from its record, with no union to form.
+    pub(crate) fn child_boxes(&self, record: u32) -> [Aabb; 2] {
+        self.records[record as usize].boxes.map(|b| {
+            let (lo, hi) = widen(&b);
+            Aabb::new(lo, hi)
+        })
+    }
+
     /// Heap bytes held.
     pub(crate) fn memory_bytes(&self) -> usize {
         heap(&self.records) + heap(&self.leaf_slot) + heap(&self.vertices)

@@ -207,6 +207,13 @@ impl Hierarchy {
             .node_box(node, self.face_count() as u32, self.root())
     }
 
+    /// The children of `node` with their boxes at the last refit, or `None` for a leaf.
+    pub(crate) fn children_boxed(&self, node: u32) -> Option<[(u32, Aabb); 2]> {
+        let [a, b] = self.node_children(node)?;
+        let [box_a, box_b] = self.boxes.child_boxes(node - self.face_count() as u32);
+        Some([(a, box_a), (b, box_b)])
+    }
+
     /// The faces below `node`.
     pub(crate) fn leaves_below(&self, node: u32) -> &[u32] {
         let n = node as usize;
