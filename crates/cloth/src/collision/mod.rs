@@ -70,6 +70,8 @@ pub(crate) struct Collisions {
     pulling: Vec<bool>,
     /// The inverse masses of the self-collision passes: zero for vertices held by the body.
     held: Vec<f64>,
+    /// The self-collision queries' answers, reused.
+    layers: self_collision::Buffers,
 }
 
 /// The moving garment of one substep: start positions, and end positions and velocities the
@@ -131,6 +133,7 @@ impl Collisions {
             contacts: Vec::new(),
             pulling: vec![false; n],
             held: Vec::with_capacity(n),
+            layers: self_collision::Buffers::default(),
         })
     }
 
@@ -200,8 +203,10 @@ impl Collisions {
                 v: &mut *motion.v,
                 inverse_mass: &self.held,
             };
-            self_collision::repel(&mut self.cloth, thickness, &mut layers)?;
-            resolved += self_collision::resolve_impacts(&mut self.cloth, thickness, &mut layers)?;
+            let buffers = &mut self.layers;
+            self_collision::repel(&mut self.cloth, thickness, &mut layers, buffers)?;
+            resolved +=
+                self_collision::resolve_impacts(&mut self.cloth, thickness, &mut layers, buffers)?;
         }
         if let Some(obstacle) = &mut self.obstacle {
             resolved += obstacle.resolve_impacts(&mut self.cloth, thickness, motion)?;

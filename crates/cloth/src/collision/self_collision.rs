@@ -9,7 +9,7 @@
 //! impulse times Σ αₖ² / mₖ ([`Motion::push_apart`]). The normal-cone culling of the collide
 //! crate keeps both queries cheap where the cloth is smooth.
 
-use tailor_collide::{CollideError, Hierarchy, Impacts};
+use tailor_collide::{CollideError, Hierarchy, Impacts, Neighbours};
 
 use super::Motion;
 use crate::energy::Vec3;
@@ -23,15 +23,25 @@ const ZONE_ROUNDS: usize = 64;
 /// Fraction of the thickness two colliding points are set to separate by.
 const SEPARATION: f64 = 0.1;
 
+/// The answers of the self-collision queries, kept from substep to substep so that each query
+/// refills them instead of allocating.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Buffers {
+    near: Neighbours,
+    impacts: Impacts,
+}
+
 /// Repulsion: every vertex within `thickness` of a face (not its own) at the start of the
 /// substep stops approaching it and separates by a tenth of the overlap per substep.
 pub(super) fn repel(
     cloth: &mut Hierarchy,
     thickness: f64,
     m: &mut Motion,
+    buffers: &mut Buffers,
 ) -> Result<(), CollideError> {
     cloth.refit(m.x0, 0.0)?;
-    let near = cloth.self_proximity(thickness)?;
+    cloth.self_proximity_into(thickness, &mut buffers.near)?;
+    let near = &buffers.near;
     let triangles = cloth.triangles();
     for p in 0..near.len() {
         for c in near.of(p) {
@@ -127,15 +137,17 @@ pub(super) fn resolve_impacts(
     cloth: &mut Hierarchy,
     thickness: f64,
     m: &mut Motion,
+    buffers: &mut Buffers,
 ) -> Result<u32, CollideError> {
+    let impacts = &mut buffers.impacts;
     let mut handled = 0;
     for _ in 0..IMPULSE_ROUNDS {
         cloth.refit_swept(m.x0, m.x, 0.0)?;
-        let impacts = cloth.self_impacts();
+        cloth.self_impacts_into(impacts);
         if impacts.vertex_triangle.is_empty() && impacts.edge_edge.is_empty() {
             return Ok(handled);
         }
-        for pair in Pair::list(cloth, &impacts) {
+        for pair in Pair::list(cloth, impacts) {
             let Some(normal) = pair.normal(m) else {
                 continue;
             };
@@ -146,14 +158,18 @@ pub(super) fn resolve_impacts(
         }
         m.sync_positions();
     }
-    Ok(handled + impact_zones(cloth, m)?)
+    Ok(handled + impact_zones(cloth, m, impacts)?)
 }
 
 /// Merges the vertices of every remaining impact into zones that move with their mean
 /// velocity (momentum kept), or with the mean velocity of the vertices in them whose motion
 /// is prescribed (pins, attachments), until no impact is left. A zone translates rigidly, so
 /// two of its features cannot meet during the substep if they did not touch at its start.
-fn impact_zones(cloth: &mut Hierarchy, m: &mut Motion) -> Result<u32, CollideError> {
+fn impact_zones(
+    cloth: &mut Hierarchy,
+    m: &mut Motion,
+    impacts: &mut Impacts,
+) -> Result<u32, CollideError> {
     let n = m.v.len();
     let mut parent: Vec<u32> = (0..n as u32).collect();
     let root = |parent: &mut Vec<u32>, mut k: u32| {
@@ -167,9 +183,9 @@ fn impact_zones(cloth: &mut Hierarchy, m: &mut Motion) -> Result<u32, CollideErr
     let mut merged = 0;
     for _ in 0..ZONE_ROUNDS {
         cloth.refit_swept(m.x0, m.x, 0.0)?;
-        let impacts = cloth.self_impacts();
+        cloth.self_impacts_into(impacts);
         let mut changed = false;
-        for pair in Pair::list(cloth, &impacts) {
+        for pair in Pair::list(cloth, impacts) {
             let first = root(&mut parent, pair.vertices[0]);
             for &k in &pair.vertices[1..] {
                 let other = root(&mut parent, k);
