@@ -3,8 +3,7 @@
 //! a curtain pinned at two corners with no obstacle. The measured frames are mid-drape, with
 //! the sheet in contact. Run: `cargo bench -p tailor-cloth --bench step`.
 
-use nalgebra::Vector3;
-use tailor_cloth::shapes::{sheet, sphere};
+use tailor_cloth::shapes::{centred_sheet, sphere};
 use tailor_cloth::{Material, Model, Motion, Settings, Simulator, State};
 use tailor_subdiv::Point;
 
@@ -19,13 +18,7 @@ fn settled(
     settings: Settings,
     setup: impl FnOnce(&mut Simulator),
 ) -> (Simulator, State) {
-    let mut garment = sheet(n, n, 2.0, 2.0);
-    let centred: Vec<Point> = garment
-        .positions()
-        .iter()
-        .map(|p| p - Vector3::new(1.0, 0.0, 1.0))
-        .collect();
-    garment.set_positions(&centred).expect("same count");
+    let garment = centred_sheet(n, 2.0);
     let model = Model::new(&garment, &Material::COTTON).expect("valid sheet");
     let mut sim = Simulator::new(model, settings).expect("valid settings");
     setup(&mut sim);

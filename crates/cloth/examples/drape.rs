@@ -7,8 +7,7 @@
 
 use std::time::Instant;
 
-use nalgebra::Vector3;
-use tailor_cloth::shapes::{sheet, sphere};
+use tailor_cloth::shapes::{centred_sheet, sphere};
 use tailor_cloth::{Material, Model, Settings, Simulator, State};
 use tailor_subdiv::Point;
 
@@ -24,13 +23,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             size => n = size.parse()?,
         }
     }
-    let mut garment = sheet(n, n, 2.0, 2.0);
-    let centred: Vec<Point> = garment
-        .positions()
-        .iter()
-        .map(|p| p - Vector3::new(1.0, 0.0, 1.0))
-        .collect();
-    garment.set_positions(&centred)?;
+    let garment = centred_sheet(n, 2.0);
     let model = Model::new(&garment, &Material::COTTON)?;
     let settings = Settings {
         self_collision,

@@ -32,6 +32,20 @@ pub fn sheet(columns: u32, rows: u32, width: f64, depth: f64) -> Mesh {
     Mesh::from_polygons(positions, &faces).expect("a sheet is a valid mesh")
 }
 
+/// A square [`sheet`] of `n × n` vertices and side `side`, flat at y = 0 and centred over the
+/// origin in x and z: the garment of issue 4's drape.
+///
+/// # Panics
+/// If `n` is below 2.
+#[must_use]
+pub fn centred_sheet(n: u32, side: f64) -> Mesh {
+    let mut mesh = sheet(n, n, side, side);
+    let half = Vec3::new(0.5 * side, 0.0, 0.5 * side);
+    let centred: Vec<Point> = mesh.positions().iter().map(|p| p - half).collect();
+    mesh.set_positions(&centred).expect("same vertex count");
+    mesh
+}
+
 /// A closed polygon sphere of `rings` latitude bands (at least 2) and `segments` longitude
 /// bands (at least 3): quads, with triangle fans at the poles (on the y axis). Faces wind
 /// counter-clockwise seen from outside, as an obstacle needs.

@@ -7,24 +7,12 @@
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-use tailor_cloth::shapes::{block, sheet, sphere};
+use tailor_cloth::shapes::{block, centred_sheet, sheet, sphere};
 use tailor_cloth::{Material, Model, Motion, Settings, Simulator, State};
 use tailor_collide::Hierarchy;
 use tailor_subdiv::{Mesh, Point, Refiner};
 
 const FRAME: f64 = 1.0 / 24.0;
-
-/// An n × n sheet of 2 m, flat at height 0, centred over the origin in x and z.
-fn centred_sheet(n: u32) -> Mesh {
-    let mut mesh = sheet(n, n, 2.0, 2.0);
-    let moved: Vec<Point> = mesh
-        .positions()
-        .iter()
-        .map(|p| p - Vector3::new(1.0, 0.0, 1.0))
-        .collect();
-    mesh.set_positions(&moved).unwrap();
-    mesh
-}
 
 fn hierarchy(mesh: &Mesh) -> Hierarchy {
     Hierarchy::build(mesh.positions(), mesh.face_offsets(), mesh.face_vertices()).unwrap()
@@ -88,7 +76,7 @@ impl Checker {
 /// The sheet of `n`² falling 0.5 m onto a static sphere of radius 0.5 m for `frames` frames
 /// of 1/`fps` s; `check` runs every frame.
 fn drape(n: u32, fps: f64, frames: u32, settings: Settings, check: bool) -> (State, Simulator) {
-    let garment = centred_sheet(n);
+    let garment = centred_sheet(n, 2.0);
     let ball = sphere(Point::new(0.0, -1.0, 0.0), 0.5, 12, 24);
     let model = Model::new(&garment, &Material::COTTON).unwrap();
     let mut sim = Simulator::new(model, settings).unwrap();
@@ -158,7 +146,7 @@ fn drape_does_not_depend_on_the_frame_rate() {
 #[test]
 fn curtain_pinned_at_two_corners_keeps_its_invariants() {
     let n = 16;
-    let garment = centred_sheet(n);
+    let garment = centred_sheet(n, 2.0);
     let settings = Settings {
         self_collision: true,
         ..Settings::default()
@@ -229,7 +217,7 @@ fn sheet_folds_onto_itself_without_crossing() {
 #[test]
 fn a_box_swept_through_the_sheet_in_one_frame_does_not_tunnel() {
     let n = 16;
-    let garment = centred_sheet(n);
+    let garment = centred_sheet(n, 2.0);
     let settings = Settings::default();
     let (low, high) = (Point::new(-0.3, -0.8, -0.3), Point::new(0.3, -0.5, 0.3));
     let start = block(low, high);
@@ -280,7 +268,7 @@ fn a_box_swept_through_the_sheet_in_one_frame_does_not_tunnel() {
 /// 13² drape of `frames` frames, with or without the simulator told about that surface.
 fn drape_surface_clearance(frames: u32, with_surface: bool) -> (f64, f64) {
     let n = 13;
-    let garment = centred_sheet(n);
+    let garment = centred_sheet(n, 2.0);
     let ball = sphere(Point::new(0.0, -1.0, 0.0), 0.5, 12, 24);
     let settings = Settings::default();
     let stencils = Refiner::new(&garment, 2).stencils();
