@@ -67,6 +67,12 @@ impl BlockMatrix {
         (self.rows[slot], self.pattern.items[slot])
     }
 
+    /// Slots of the blocks stored in row `i`.
+    #[must_use]
+    pub fn row_range(&self, i: usize) -> std::ops::Range<usize> {
+        self.pattern.range(i)
+    }
+
     /// Columns of the blocks stored in row `i`, sorted.
     #[must_use]
     pub fn columns(&self, i: usize) -> &[u32] {

@@ -72,7 +72,7 @@ impl Pcg {
             r: vec![Vec3::zeros(); n],
             p: vec![Vec3::zeros(); n],
             q: vec![Vec3::zeros(); n],
-            multigrid: Multigrid::new(pattern),
+            multigrid: Multigrid::new(n),
             partials: vec![[0.0; 2]; partial_count(n)],
         }
     }
