@@ -8,6 +8,8 @@
 //!
 //! That is exactly one Newton iteration on the residual R(v) = M (v − v₀) − h f(x₀ + h v, v)
 //! started from v = 0 (x = x₀), which is how it is computed here (CG warm-started at Δv = 0).
+//! When the solution takes free vertices into the body, they become contacts and the same
+//! system is solved again from it (up to [`CONTACT_ROUNDS`] times; see [`crate::collision`]).
 //! With `newton_iterations > 1`, further iterations re-linearize at the new iterate; R is the
 //! gradient of the *incremental potential*
 //!
@@ -29,11 +31,15 @@ use tailor_subdiv::{Point, StencilTable};
 use crate::assemble::{Assembly, Coefficients, Environment, Totals};
 use crate::collision::{Collisions, Motion as Substep, Obstacle, Surface};
 use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
-use crate::energy::Vec3;
+use crate::energy::{Mat3, Vec3};
 use crate::pcg::Pcg;
 use crate::reduce::{partial_count, sum_by};
 use crate::strain_limit::StrainLimiter;
 use crate::{ClothError, Model, StepFailure};
+
+/// Most times a substep's linear system is solved again with the body contacts its last
+/// solution revealed.
+const CONTACT_ROUNDS: usize = 2;
 
 /// How the simulator steps.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -149,6 +155,9 @@ struct Work {
     filter: Filter,
     /// 1 / mass, zero for a vertex whose position the constraints prescribe.
     inverse_mass: Vec<f64>,
+    /// The body contact's normal of each vertex in contact, zero for the others.
+    contact_normals: Vec<Vec3>,
+
     partials: Vec<f64>,
 }
 
@@ -223,6 +232,7 @@ impl Simulator {
                 rhs: vec![Vec3::zeros(); n],
                 filter: Filter::new(n),
                 inverse_mass: vec![0.0; n],
+                contact_normals: vec![Vec3::zeros(); n],
                 partials: vec![0.0; partial_count(n)],
             },
             model,
@@ -485,6 +495,76 @@ impl Simulator {
         }
     }
 
+    /// The second look at the body (step 1 of [`crate::collision`]): vertices the solve's
+    /// result `v + delta` takes into the body become contacts and the same linear system is
+    /// solved again with them constrained, from the last solution, up to
+    /// [`CONTACT_ROUNDS`] times. Without it a vertex the first look missed (released, or
+    /// pulled in faster than its velocity foretold) would end inside the body and only the
+    /// projection after the solve would put it back, straining the edges around it.
+    fn add_missed_contacts(
+        &mut self,
+        t1: f64,
+        h: f64,
+        report: &mut StepReport,
+    ) -> Result<(), StepFailure> {
+        for _ in 0..CONTACT_ROUNDS {
+            let w = &mut self.work;
+            for (i, x) in w.x.iter_mut().enumerate() {
+                *x = w.x0[i] + (w.v[i] + w.delta[i]) * h;
+            }
+            let s = &w.filter.s;
+            let free = |i: usize| s[i] == Mat3::identity();
+            if self
+                .collisions
+                .missed_contacts(&self.settings, h, &w.x0, &w.x, free)
+                == 0
+            {
+                break;
+            }
+            self.prepare_filter(t1, h);
+            let w = &mut self.work;
+            // Keep the free part of the last solution; put the constrained part on target.
+            let f = &w.filter;
+            for (i, d) in w.delta.iter_mut().enumerate() {
+                *d = f.s[i] * *d + (Mat3::identity() - f.s[i]) * (f.z[i] - w.v[i]);
+            }
+            self.solve(report)?;
+        }
+        Ok(())
+    }
+
+    /// The filter of the substep ending at `t1`: the constraints and the body contacts.
+    fn prepare_filter(&mut self, t1: f64, h: f64) {
+        let w = &mut self.work;
+        self.constraints.prepare(
+            &self.model.rest,
+            &w.x0,
+            t1,
+            h,
+            &self.collisions.contacts,
+            &mut w.filter,
+        );
+    }
+
+    /// Solves the filtered system for `work.delta`, from its value.
+    fn solve(&mut self, report: &mut StepReport) -> Result<(), StepFailure> {
+        let w = &mut self.work;
+        let solve = self.pcg.solve(
+            &self.assembly.matrix,
+            &w.filter.s,
+            &w.rhs,
+            &mut w.delta,
+            self.settings.cg_tolerance,
+            self.settings.cg_max_iterations,
+        );
+        report.cg_iterations += solve.iterations;
+        if solve.converged {
+            Ok(())
+        } else {
+            Err(StepFailure::SolverDiverged)
+        }
+    }
+
     fn implicit_substep(
         &mut self,
         state: &mut State,
@@ -498,14 +578,8 @@ impl Simulator {
         self.collisions
             .before_solve(&self.settings, state.time, h, &w.x0, &w.v0)
             .map_err(|_| StepFailure::NonFinite)?;
-        self.constraints.prepare(
-            &self.model.rest,
-            &w.x0,
-            t1,
-            h,
-            &self.collisions.contacts,
-            &mut w.filter,
-        );
+        self.prepare_filter(t1, h);
+        let w = &mut self.work;
         for (i, v) in w.trial.iter_mut().enumerate() {
             *v = w.filter.z[i] - w.filter.s[i] * w.filter.z[i];
         }
@@ -520,19 +594,10 @@ impl Simulator {
                     Vec3::zeros()
                 };
             }
-            let solve = self.pcg.solve(
-                &self.assembly.matrix,
-                &w.filter.s,
-                &w.rhs,
-                &mut w.delta,
-                self.settings.cg_tolerance,
-                self.settings.cg_max_iterations,
-            );
-            report.cg_iterations += solve.iterations;
             report.newton_iterations += 1;
-            if !solve.converged {
-                return Err(StepFailure::SolverDiverged);
-            }
+            self.solve(report)?;
+            self.add_missed_contacts(t1, h, report)?;
+            let w = &self.work;
             let slope: f64 = w.rhs.iter().zip(&w.delta).map(|(r, d)| r.dot(d)).sum();
             let mut alpha = 1.0;
             loop {
@@ -577,16 +642,37 @@ impl Simulator {
         // Friction first: strain limiting and the collision passes have the last word.
         self.collisions
             .friction(&self.settings, &w.rhs, &mut motion);
-        if self.settings.strain_limit > 0.0 {
+        let limit = self.settings.strain_limit;
+        if limit > 0.0 {
+            w.contact_normals.fill(Vec3::zeros());
+            for c in &self.collisions.contacts {
+                w.contact_normals[c.vertex as usize] = c.normal;
+            }
             report.strain_corrections += self.strain_limiter.limit(
                 &self.model.springs,
-                self.settings.strain_limit,
+                limit,
                 &mut motion,
+                &w.contact_normals,
             );
         }
+        let repelled = self
+            .collisions
+            .repel(&self.settings, &mut motion)
+            .map_err(|_| StepFailure::NonFinite)?;
+        // Collision impulses stop features approaching at once, which strains the edges
+        // around them: limit again after them, the cloth around taking up the slack.
+        let (limiter, springs) = (&mut self.strain_limiter, &self.model.springs);
+        let normals = &w.contact_normals;
+        let mut relax = |m: &mut Substep, moved: &[bool]| {
+            if limit > 0.0 && moved.contains(&true) {
+                report.strain_corrections +=
+                    limiter.limit_around(springs, limit, m, normals, moved);
+            }
+        };
+        relax(&mut motion, repelled);
         let impacts = self
             .collisions
-            .resolve(&self.settings, &mut motion)
+            .resolve(&self.settings, &mut motion, &mut relax)
             .map_err(|_| StepFailure::NonFinite)?;
         state.positions.copy_from_slice(&w.x);
         state.velocities.copy_from_slice(&w.trial);

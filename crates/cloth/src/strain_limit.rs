@@ -15,13 +15,21 @@
 //! sweep after sweep until none is past the limit or [`SWEEPS`] is reached; the result does
 //! not depend on the thread count.
 //! Each correction Δx of a vertex also changes its velocity by Δx / h, keeping the position
-//! the one the velocity reaches over the substep.
+//! the one the velocity reaches over the substep. A vertex held against the body slides on its
+//! contact plane: the part of a correction that would push it into the body is dropped (the
+//! projection after would only push it back out and strain the edges again). After a
+//! collision pass, [`StrainLimiter::limit_around`] runs the same sweeps with the vertices the
+//! pass moved a hundred times heavier, so the cloth around them takes up the strain.
 
 use crate::collision::Motion as Substep;
+use crate::energy::Vec3;
 use crate::model::Springs;
 
 /// Most Gauss–Seidel sweeps over the edges per substep.
-pub const SWEEPS: usize = 16;
+pub const SWEEPS: usize = 64;
+
+/// How much heavier a vertex a collision pass moved is in [`StrainLimiter::limit_around`].
+const MOVED_MASS: f64 = 100.0;
 
 /// No fixed vertex reaches this vertex through edges.
 const UNREACHED: u32 = u32::MAX;
@@ -38,6 +46,8 @@ pub(crate) struct StrainLimiter {
     depth: Vec<u32>,
     /// Which vertices were fixed when `order` was made.
     fixed: Vec<bool>,
+    /// The inverse masses of [`Self::limit_around`].
+    weights: Vec<f64>,
 }
 
 impl StrainLimiter {
@@ -64,6 +74,7 @@ impl StrainLimiter {
             order: (0..springs.verts.len() as u32).collect(),
             depth: vec![UNREACHED; vertex_count],
             fixed: vec![false; vertex_count],
+            weights: Vec::with_capacity(vertex_count),
         }
     }
 
@@ -120,7 +131,13 @@ impl StrainLimiter {
     /// 2003): cloth hanging from pins or attachments is pulled back in one sweep instead of a
     /// correction diffusing one edge per sweep. Later sweeps alternate backwards and
     /// forwards with the mass-weighted split.
-    pub fn limit(&mut self, springs: &Springs, limit: f64, m: &mut Substep) -> u32 {
+    pub fn limit(
+        &mut self,
+        springs: &Springs,
+        limit: f64,
+        m: &mut Substep,
+        contact_normals: &[Vec3],
+    ) -> u32 {
         let Substep {
             h,
             x,
@@ -158,8 +175,8 @@ impl StrainLimiter {
                 }
                 // Moving a by +s·wa·d and b by −s·wb·d changes the length by −s (wa + wb) length.
                 let s = (length - goal) / (length * (wa + wb));
-                let da = d * (s * wa);
-                let db = d * (-s * wb);
+                let da = into_free_side(d * (s * wa), contact_normals[a]);
+                let db = into_free_side(d * (-s * wb), contact_normals[b]);
                 x[a] += da;
                 v[a] += da / h;
                 x[b] += db;
@@ -175,17 +192,62 @@ impl StrainLimiter {
     }
 }
 
+/// `delta` without its component along `normal` when that points into the body (a zero
+/// `normal` is no contact): a correction slides a contact vertex along its plane or lifts it,
+/// never pushes it into the body for the projection after to push back.
+fn into_free_side(delta: Vec3, normal: Vec3) -> Vec3 {
+    let into = delta.dot(&normal);
+    if into < 0.0 {
+        delta - normal * into
+    } else {
+        delta
+    }
+}
+
+impl StrainLimiter {
+    /// [`Self::limit`] after a collision pass: the vertices `moved` flags count [`MOVED_MASS`]
+    /// times heavier, so the cloth around them takes up the strain the pass left rather than
+    /// undoing what it did.
+    pub fn limit_around(
+        &mut self,
+        springs: &Springs,
+        limit: f64,
+        m: &mut Substep,
+        contact_normals: &[Vec3],
+        moved: &[bool],
+    ) -> u32 {
+        let mut weights = std::mem::take(&mut self.weights);
+        weights.clear();
+        weights.extend(
+            m.inverse_mass
+                .iter()
+                .zip(moved)
+                .map(|(&w, &moved)| if moved { w / MOVED_MASS } else { w }),
+        );
+        let corrections = self.limit(springs, limit, &mut m.weighted(&weights), contact_normals);
+        self.weights = weights;
+        corrections
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::energy::Vec3;
     use tailor_subdiv::Point;
 
-    /// Runs the limiter at 10% on a substep of 0.01 s ending at `x` with zero velocities;
-    /// returns the corrections and the velocities.
-    fn limit(springs: &Springs, inverse_mass: &[f64], x: &mut [Point]) -> (u32, Vec<Vec3>) {
+    /// Runs the limiter at 10% on a substep of 0.01 s ending at `x` with zero velocities,
+    /// with contact `normals` (none if empty), after a collision pass that `moved` the
+    /// vertices it flags (none if empty); returns the corrections and the velocities.
+    fn run(
+        springs: &Springs,
+        inverse_mass: &[f64],
+        x: &mut [Point],
+        normals: &[Vec3],
+        moved: &[bool],
+    ) -> (u32, Vec<Vec3>) {
         let x0 = x.to_vec();
-        let mut v = vec![Vec3::zeros(); x.len()];
+        let n = inverse_mass.len();
+        let mut v = vec![Vec3::zeros(); n];
         let mut m = Substep {
             h: 0.01,
             x0: &x0,
@@ -193,8 +255,20 @@ mod tests {
             v: &mut v,
             inverse_mass,
         };
-        let n = StrainLimiter::new(springs, inverse_mass.len()).limit(springs, 0.1, &mut m);
-        (n, v)
+        let free = vec![Vec3::zeros(); n];
+        let normals = if normals.is_empty() { &free } else { normals };
+        let mut limiter = StrainLimiter::new(springs, n);
+        let corrections = if moved.is_empty() {
+            limiter.limit(springs, 0.1, &mut m, normals)
+        } else {
+            limiter.limit_around(springs, 0.1, &mut m, normals, moved)
+        };
+        (corrections, v)
+    }
+
+    /// [`run`] with no contacts and no collision pass.
+    fn limit(springs: &Springs, inverse_mass: &[f64], x: &mut [Point]) -> (u32, Vec<Vec3>) {
+        run(springs, inverse_mass, x, &[], &[])
     }
 
     fn chain(lengths: &[f64]) -> (Springs, Vec<Point>) {
@@ -227,6 +301,36 @@ mod tests {
         limit(&springs, &[0.0, 1.0], &mut x);
         assert_eq!(x[0], Point::origin());
         assert!((x[1].x - 0.9).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_contact_vertex_is_not_pushed_into_the_body() {
+        // Squashed to half: lengthening would move b along +x, into the body behind its
+        // contact plane (normal −x), so only a moves, and all the way.
+        let (springs, mut x) = chain(&[0.5]);
+        let b = x[1];
+        let (_, v) = run(
+            &springs,
+            &[1.0, 1.0],
+            &mut x,
+            &[Vec3::zeros(), -Vec3::x()],
+            &[],
+        );
+        assert_eq!(x[1], b);
+        assert!(((x[1] - x[0]).norm() - 0.9).abs() < 1e-12, "{x:?}");
+        assert!(x[0].x < 0.0 && v[0].x < 0.0);
+    }
+
+    #[test]
+    fn after_a_collision_pass_the_moved_vertex_is_heavier() {
+        let (springs, mut x) = chain(&[1.5]);
+        run(&springs, &[1.0, 1.0], &mut x, &[], &[true, false]);
+        // 0.4 of shortening, shared 1 : 100 by inverse mass.
+        assert!((x[0].x - 0.4 / 101.0).abs() < 1e-12, "{x:?}");
+        assert!(
+            (x[1].x - (1.5 - 0.4 * 100.0 / 101.0)).abs() < 1e-12,
+            "{x:?}"
+        );
     }
 
     #[test]

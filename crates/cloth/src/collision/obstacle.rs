@@ -40,6 +40,9 @@ pub(crate) struct Obstacle {
     velocity: Vec<Vec3>,
     /// The continuous pass's impacts, kept to reuse the allocation.
     impacts: Vec<VertexTriangleImpact>,
+    /// The closest body point of each vertex at the start of the substep, within the reach
+    /// of [`Self::find_contacts`].
+    closest: Vec<Option<Closest>>,
 }
 
 impl Obstacle {
@@ -58,6 +61,7 @@ impl Obstacle {
             substep: [positions.to_vec(), positions.to_vec()],
             velocity: vec![Vec3::zeros(); n],
             impacts: Vec::new(),
+            closest: Vec::new(),
         })
     }
 
@@ -145,8 +149,9 @@ impl Obstacle {
         let fastest = |v: &[Vec3]| v.iter().map(|v| v.norm()).fold(0.0, f64::max);
         let reach = h * (fastest(v0) + h * settings.gravity.norm() + fastest(&self.velocity));
         self.hierarchy.refit(&self.substep[0], 0.0)?;
-        let closest = self.hierarchy.closest_points(x0, thickness + reach)?;
-        for (i, c) in closest.iter().enumerate() {
+        self.hierarchy
+            .closest_points_into(x0, thickness + reach, &mut self.closest)?;
+        for (i, c) in self.closest.iter().enumerate() {
             let Some(c) = c else { continue };
             if pulling[i] {
                 continue;
@@ -164,6 +169,39 @@ impl Obstacle {
             }
         }
         Ok(())
+    }
+
+    /// Contacts the solve missed (step 1's second look): each vertex `free` says is
+    /// unconstrained that ends the substep at `x` closer than half the thickness to the moving
+    /// plane of its start's closest body point (found by the last [`Self::find_contacts`])
+    /// gets the contact that call would have given it, appended to `out`. Returns how many.
+    pub fn missed_contacts(
+        &self,
+        thickness: f64,
+        h: f64,
+        x0: &[Point],
+        x: &[Point],
+        free: impl Fn(usize) -> bool,
+        out: &mut Vec<Contact>,
+    ) -> usize {
+        let before = out.len();
+        for (i, c) in self.closest.iter().enumerate() {
+            let Some(c) = c else { continue };
+            if !free(i) {
+                continue;
+            }
+            let (normal, distance) = away_from(x0[i], c);
+            let body = self.velocity_at(c);
+            if (x[i] - c.point - body * h).dot(&normal) < 0.5 * thickness {
+                let approach = (distance - thickness).max(0.0) / h;
+                out.push(Contact {
+                    vertex: i as u32,
+                    normal,
+                    velocity: body - normal * approach,
+                });
+            }
+        }
+        out.len() - before
     }
 
     /// Puts back on the front of a body face every vertex whose path over the substep enters
@@ -307,5 +345,51 @@ pub(super) fn friction(
             m.v[i] += change;
             m.x[i] += change * m.h;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::block;
+
+    #[test]
+    fn a_vertex_the_solve_takes_into_the_body_becomes_a_contact_on_its_start_plane() {
+        // A floor whose top is y = 0; substeps of 10 ms, thickness 5 mm.
+        let floor = block(Point::new(-1.0, -1.0, -1.0), Point::new(1.0, 0.0, 1.0));
+        let mut obstacle = Obstacle::new(
+            floor.positions(),
+            floor.face_offsets(),
+            floor.face_vertices(),
+        )
+        .expect("a box");
+        let settings = Settings::default();
+        let h = 0.01;
+        obstacle.begin_substep(0.0, h);
+        // Vertex 0 falls at 1 m/s from 2 cm (the first look reaches 1.1 cm), vertex 1 rests
+        // 12 mm up, vertex 2 rests 12 mm up but is pinned: none is expected to reach the
+        // thickness, so there are no contacts before the solve.
+        let x0 = [0.02, 0.012, 0.012].map(|y| Point::new(0.0, y, 0.0));
+        let v0 = [-Vec3::y(), Vec3::zeros(), Vec3::zeros()];
+        let mut contacts = Vec::new();
+        obstacle
+            .find_contacts(&settings, h, &x0, &v0, &[false; 3], &mut contacts)
+            .expect("finite");
+        assert!(contacts.is_empty());
+        // The solve ends vertex 0 at 1 cm, vertex 1 and 2 at 1 mm (pulled in by the cloth).
+        let x = [0.01, 0.001, 0.001].map(|y| Point::new(0.0, y, 0.0));
+        let added =
+            obstacle.missed_contacts(settings.thickness, h, &x0, &x, |i| i != 2, &mut contacts);
+        assert_eq!(added, 1);
+        let c = &contacts[0];
+        assert_eq!(c.vertex, 1);
+        assert!((c.normal - Vec3::y()).norm() < 1e-12);
+        // Its normal velocity brings it from 12 mm to the thickness over the substep.
+        let expected = -(0.012 - settings.thickness) / h;
+        assert!(
+            (c.velocity - Vec3::y() * expected).norm() < 1e-9,
+            "{:?}",
+            c.velocity
+        );
     }
 }

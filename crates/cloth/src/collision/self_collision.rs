@@ -29,37 +29,46 @@ const SEPARATION: f64 = 0.1;
 pub(super) struct Buffers {
     near: Neighbours,
     impacts: Impacts,
+    /// The vertices an impulse round changed.
+    touched: Vec<bool>,
 }
 
-/// Repulsion: every vertex within `thickness` of a face (not its own) at the start of the
-/// substep stops approaching it and separates by a tenth of the overlap per substep.
+/// Repulsion: every vertex within `thickness` of a face at the start of the substep stops
+/// approaching it and separates by a tenth of the overlap per substep; `moved` flags the
+/// vertices whose velocities it changed.
 pub(super) fn repel(
     cloth: &mut Hierarchy,
     thickness: f64,
     m: &mut Motion,
     buffers: &mut Buffers,
+    moved: &mut [bool],
 ) -> Result<(), CollideError> {
+    moved.fill(false);
     cloth.refit(m.x0, 0.0)?;
     cloth.self_proximity_into(thickness, &mut buffers.near)?;
     let near = &buffers.near;
     let triangles = cloth.triangles();
     for p in 0..near.len() {
         for c in near.of(p) {
+            let [a, b, d] = triangles[c.triangle as usize];
             let offset = m.x0[p] - c.point;
             let normal = if c.distance > 0.0 {
                 offset / c.distance
             } else {
                 c.normal
             };
-            let [a, b, d] = triangles[c.triangle as usize];
             let w = c.barycentric;
             let target = SEPARATION * (thickness - c.distance) / m.h;
-            m.push_apart(
+            if m.push_apart(
                 [p as u32, a, b, d],
                 [1.0, -w[0], -w[1], -w[2]],
                 normal,
                 target,
-            );
+            ) {
+                for k in [p, a as usize, b as usize, d as usize] {
+                    moved[k] = true;
+                }
+            }
         }
     }
     m.sync_positions();
@@ -131,15 +140,21 @@ impl Pair {
     }
 }
 
-/// Continuous self-collision: impulses at the impacts for a few rounds, then impact zones.
-/// Returns how many impacts it handled.
+/// Continuous self-collision: impulses at the impacts for a few rounds, each followed by
+/// `relax` (strain limiting, the vertices it flags heavier: an impulse stops two features
+/// approaching at once, which strains the edges around them; the next round's query checks
+/// that relaxing crossed nothing), then impact zones. Returns how many impacts it handled.
 pub(super) fn resolve_impacts(
     cloth: &mut Hierarchy,
     thickness: f64,
     m: &mut Motion,
     buffers: &mut Buffers,
+    relax: &mut impl FnMut(&mut Motion, &[bool]),
 ) -> Result<u32, CollideError> {
-    let impacts = &mut buffers.impacts;
+    let Buffers {
+        impacts, touched, ..
+    } = buffers;
+    touched.resize(m.v.len(), false);
     let mut handled = 0;
     for _ in 0..IMPULSE_ROUNDS {
         cloth.refit_swept(m.x0, m.x, 0.0)?;
@@ -147,16 +162,22 @@ pub(super) fn resolve_impacts(
         if impacts.vertex_triangle.is_empty() && impacts.edge_edge.is_empty() {
             return Ok(handled);
         }
+        touched.fill(false);
         for pair in Pair::list(cloth, impacts) {
             let Some(normal) = pair.normal(m) else {
                 continue;
             };
             let gap = pair.combine(|k| m.x0[k].coords).dot(&normal);
             let target = (SEPARATION * thickness - gap) / m.h;
-            m.push_apart(pair.vertices, pair.alpha, normal, target);
+            if m.push_apart(pair.vertices, pair.alpha, normal, target) {
+                for &k in &pair.vertices {
+                    touched[k as usize] = true;
+                }
+            }
             handled += 1;
         }
         m.sync_positions();
+        relax(m, touched);
     }
     Ok(handled + impact_zones(cloth, m, impacts)?)
 }
