@@ -1,7 +1,8 @@
-//! Milliseconds per frame (24 fps, 5 substeps) of issue 4's drape: a 2 m square sheet of n²
-//! vertices falling 0.5 m onto a sphere of radius 0.5 m, with self-collision off and on, and of
-//! a curtain pinned at two corners with no obstacle. The measured frames are mid-drape, with
-//! the sheet in contact. Run: `cargo bench -p tailor-cloth --bench step`.
+//! Milliseconds per frame (24 fps, the default two substeps) of issue 4's drape: a 2 m square
+//! sheet of n² vertices falling 0.5 m onto a sphere of radius 0.5 m, with self-collision off
+//! and on, the same at Blender's five substeps a frame, and a curtain pinned at two corners
+//! with no obstacle. The measured frames are mid-drape, with the sheet in contact. Run:
+//! `cargo bench -p tailor-cloth --bench step`.
 
 use tailor_cloth::shapes::{centred_sheet, sphere};
 use tailor_cloth::{Material, Model, Motion, Settings, Simulator, State};
@@ -29,10 +30,12 @@ fn settled(
     (sim, state)
 }
 
-fn drape(n: u32, self_collision: bool) -> (Simulator, State) {
+fn drape(n: u32, self_collision: bool, substeps: Option<u32>) -> (Simulator, State) {
+    let defaults = Settings::default();
     let settings = Settings {
         self_collision,
-        ..Settings::default()
+        max_substep: substeps.map_or(defaults.max_substep, |s| 1.0 / (24.0 * f64::from(s))),
+        ..defaults
     };
     // Contact begins at frame 8; measure from frame 16 on.
     settled(n, 16, settings, |sim| {
@@ -44,13 +47,20 @@ fn drape(n: u32, self_collision: bool) -> (Simulator, State) {
 
 #[divan::bench(args = [32, 64, 128], sample_count = 5, sample_size = 1)]
 fn sphere_drape(bencher: divan::Bencher, n: u32) {
-    let (mut sim, mut state) = drape(n, false);
+    let (mut sim, mut state) = drape(n, false, None);
     bencher.bench_local(|| sim.step(&mut state, 1.0 / 24.0).expect("stable"));
 }
 
 #[divan::bench(args = [32, 64, 128], sample_count = 5, sample_size = 1)]
 fn sphere_drape_self_collision(bencher: divan::Bencher, n: u32) {
-    let (mut sim, mut state) = drape(n, true);
+    let (mut sim, mut state) = drape(n, true, None);
+    bencher.bench_local(|| sim.step(&mut state, 1.0 / 24.0).expect("stable"));
+}
+
+/// The drape at Blender's five substeps a frame, self-collision off and on.
+#[divan::bench(args = [(64, false), (128, false), (64, true), (128, true)], sample_count = 5, sample_size = 1)]
+fn sphere_drape_5_substeps(bencher: divan::Bencher, (n, self_collision): (u32, bool)) {
+    let (mut sim, mut state) = drape(n, self_collision, Some(5));
     bencher.bench_local(|| sim.step(&mut state, 1.0 / 24.0).expect("stable"));
 }
 

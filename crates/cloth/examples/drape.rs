@@ -1,9 +1,10 @@
 //! Issue 4's drape scenario, frame by frame: a 2 m square sheet of n² vertices falling 0.5 m
-//! onto a sphere of radius 0.5 m, 60 frames at 24 fps (5 substeps each). Prints per frame the
-//! time, the solver's work (Newton and CG iterations), the contacts, the fail-safe's impacts
-//! and the worst edge strain, then the totals: the figures behind the `step` benchmark.
+//! onto a sphere of radius 0.5 m, 60 frames at 24 fps (the default substeps, or `--substeps`
+//! a frame). Prints per frame the time, the solver's work (Newton and CG iterations), the
+//! contacts, the fail-safe's impacts and the worst edge strain, then the totals: the figures
+//! behind the `step` benchmark.
 //!
-//! `cargo run --release -p tailor-cloth --example drape -- [N] [--self] [--frames F]`
+//! `cargo run --release -p tailor-cloth --example drape -- [N] [--self] [--frames F] [--substeps S]`
 
 use std::time::Instant;
 
@@ -15,19 +16,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut n = 64;
     let mut frames = 60;
     let mut self_collision = false;
+    let mut substeps: Option<u32> = None;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--self" => self_collision = true,
             "--frames" => frames = args.next().ok_or("--frames needs a count")?.parse()?,
+            "--substeps" => {
+                substeps = Some(args.next().ok_or("--substeps needs a count")?.parse()?);
+            }
             size => n = size.parse()?,
         }
     }
     let garment = centred_sheet(n, 2.0);
     let model = Model::new(&garment, &Material::COTTON)?;
+    let defaults = Settings::default();
     let settings = Settings {
         self_collision,
-        ..Settings::default()
+        max_substep: substeps.map_or(defaults.max_substep, |s| 1.0 / (24.0 * f64::from(s))),
+        ..defaults
     };
     let mut sim = Simulator::new(model, settings)?;
     let ball = sphere(Point::new(0.0, -1.0, 0.0), 0.5, 24, 48);

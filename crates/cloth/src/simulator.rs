@@ -44,7 +44,7 @@ const CONTACT_ROUNDS: usize = 2;
 /// How the simulator steps.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
-    /// Longest substep, seconds (default 1/120: 5 substeps per frame at 24 fps).
+    /// Longest substep, seconds (default 1/48: 2 substeps per frame at 24 fps).
     pub max_substep: f64,
     /// Newton iterations per substep; 1 is Baraff & Witkin's linearly implicit step.
     pub newton_iterations: u32,
@@ -79,7 +79,7 @@ pub struct Settings {
 impl Default for Settings {
     fn default() -> Self {
         Self {
-            max_substep: 1.0 / 120.0,
+            max_substep: 1.0 / 48.0,
             newton_iterations: 1,
             line_search: false,
             cg_tolerance: 1e-3,
