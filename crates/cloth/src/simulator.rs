@@ -34,7 +34,7 @@ use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
 use crate::energy::{Mat3, Vec3};
 use crate::pcg::Pcg;
 use crate::reduce::{partial_count, sum_by};
-use crate::strain_limit::StrainLimiter;
+use crate::strain_limit::{Floor, StrainLimiter};
 use crate::{ClothError, Model, StepFailure};
 
 /// Most times a substep's linear system is solved again with the body contacts its last
@@ -155,8 +155,8 @@ struct Work {
     filter: Filter,
     /// 1 / mass, zero for a vertex whose position the constraints prescribe.
     inverse_mass: Vec<f64>,
-    /// The body contact's normal of each vertex in contact, zero for the others.
-    contact_normals: Vec<Vec3>,
+    /// The floors of strain limiting above the body.
+    floors: Vec<Floor>,
 
     partials: Vec<f64>,
 }
@@ -232,7 +232,7 @@ impl Simulator {
                 rhs: vec![Vec3::zeros(); n],
                 filter: Filter::new(n),
                 inverse_mass: vec![0.0; n],
-                contact_normals: vec![Vec3::zeros(); n],
+                floors: vec![Floor::NONE; n],
                 partials: vec![0.0; partial_count(n)],
             },
             model,
@@ -644,16 +644,11 @@ impl Simulator {
             .friction(&self.settings, &w.rhs, &mut motion);
         let limit = self.settings.strain_limit;
         if limit > 0.0 {
-            w.contact_normals.fill(Vec3::zeros());
-            for c in &self.collisions.contacts {
-                w.contact_normals[c.vertex as usize] = c.normal;
-            }
-            report.strain_corrections += self.strain_limiter.limit(
-                &self.model.springs,
-                limit,
-                &mut motion,
-                &w.contact_normals,
-            );
+            self.collisions
+                .floors(&self.settings, h, &w.x0, &mut w.floors);
+            report.strain_corrections +=
+                self.strain_limiter
+                    .limit(&self.model.springs, limit, &mut motion, &w.floors);
         }
         let repelled = self
             .collisions
@@ -662,11 +657,10 @@ impl Simulator {
         // Collision impulses stop features approaching at once, which strains the edges
         // around them: limit again after them, the cloth around taking up the slack.
         let (limiter, springs) = (&mut self.strain_limiter, &self.model.springs);
-        let normals = &w.contact_normals;
+        let floors = &w.floors;
         let mut relax = |m: &mut Substep, moved: &[bool]| {
             if limit > 0.0 && moved.contains(&true) {
-                report.strain_corrections +=
-                    limiter.limit_around(springs, limit, m, normals, moved);
+                report.strain_corrections += limiter.limit_around(springs, limit, m, floors, moved);
             }
         };
         relax(&mut motion, repelled);

@@ -15,11 +15,13 @@
 //! sweep after sweep until none is past the limit or [`SWEEPS`] is reached; the result does
 //! not depend on the thread count.
 //! Each correction Δx of a vertex also changes its velocity by Δx / h, keeping the position
-//! the one the velocity reaches over the substep. A vertex held against the body slides on its
-//! contact plane: the part of a correction that would push it into the body is dropped (the
+//! the one the velocity reaches over the substep. A vertex near the body has a [`Floor`] a
+//! little above it: a correction that would take it below is shortened to end there (the
 //! projection after would only push it back out and strain the edges again). After a
 //! collision pass, [`StrainLimiter::limit_around`] runs the same sweeps with the vertices the
 //! pass moved a hundred times heavier, so the cloth around them takes up the strain.
+
+use tailor_subdiv::Point;
 
 use crate::collision::Motion as Substep;
 use crate::energy::Vec3;
@@ -136,7 +138,7 @@ impl StrainLimiter {
         springs: &Springs,
         limit: f64,
         m: &mut Substep,
-        contact_normals: &[Vec3],
+        floors: &[Floor],
     ) -> u32 {
         let Substep {
             h,
@@ -175,8 +177,8 @@ impl StrainLimiter {
                 }
                 // Moving a by +s·wa·d and b by −s·wb·d changes the length by −s (wa + wb) length.
                 let s = (length - goal) / (length * (wa + wb));
-                let da = into_free_side(d * (s * wa), contact_normals[a]);
-                let db = into_free_side(d * (-s * wb), contact_normals[b]);
+                let da = floors[a].clamp(x[a], d * (s * wa));
+                let db = floors[b].clamp(x[b], d * (-s * wb));
                 x[a] += da;
                 v[a] += da / h;
                 x[b] += db;
@@ -192,15 +194,36 @@ impl StrainLimiter {
     }
 }
 
-/// `delta` without its component along `normal` when that points into the body (a zero
-/// `normal` is no contact): a correction slides a contact vertex along its plane or lifts it,
-/// never pushes it into the body for the projection after to push back.
-fn into_free_side(delta: Vec3, normal: Vec3) -> Vec3 {
-    let into = delta.dot(&normal);
-    if into < 0.0 {
-        delta - normal * into
-    } else {
-        delta
+/// A half-space a vertex's corrections must not leave: n · x ≥ offset for a unit normal n
+/// pointing away from the body (a floor a little above the body's surface at the end of the
+/// substep), or none.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Floor {
+    pub normal: Vec3,
+    pub offset: f64,
+}
+
+impl Floor {
+    /// No floor.
+    pub const NONE: Self = Self {
+        normal: Vec3::new(0.0, 0.0, 0.0),
+        offset: f64::NEG_INFINITY,
+    };
+
+    /// The correction `delta` of a vertex at `x`, shortened along the normal where it would
+    /// take the vertex below the floor: a vertex near the body slides along it or stops at
+    /// the floor, never pushed into the body for the projection after to push back.
+    fn clamp(&self, x: Point, delta: Vec3) -> Vec3 {
+        let inward = delta.dot(&self.normal);
+        if inward >= 0.0 {
+            return delta;
+        }
+        let room = (self.normal.dot(&x.coords) - self.offset).max(0.0);
+        if inward < -room {
+            delta - self.normal * (inward + room)
+        } else {
+            delta
+        }
     }
 }
 
@@ -213,7 +236,7 @@ impl StrainLimiter {
         springs: &Springs,
         limit: f64,
         m: &mut Substep,
-        contact_normals: &[Vec3],
+        floors: &[Floor],
         moved: &[bool],
     ) -> u32 {
         let mut weights = std::mem::take(&mut self.weights);
@@ -224,7 +247,7 @@ impl StrainLimiter {
                 .zip(moved)
                 .map(|(&w, &moved)| if moved { w / MOVED_MASS } else { w }),
         );
-        let corrections = self.limit(springs, limit, &mut m.weighted(&weights), contact_normals);
+        let corrections = self.limit(springs, limit, &mut m.weighted(&weights), floors);
         self.weights = weights;
         corrections
     }
@@ -233,16 +256,15 @@ impl StrainLimiter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tailor_subdiv::Point;
 
     /// Runs the limiter at 10% on a substep of 0.01 s ending at `x` with zero velocities,
-    /// with contact `normals` (none if empty), after a collision pass that `moved` the
+    /// with `floors` (none if empty), after a collision pass that `moved` the
     /// vertices it flags (none if empty); returns the corrections and the velocities.
     fn run(
         springs: &Springs,
         inverse_mass: &[f64],
         x: &mut [Point],
-        normals: &[Vec3],
+        floors: &[Floor],
         moved: &[bool],
     ) -> (u32, Vec<Vec3>) {
         let x0 = x.to_vec();
@@ -255,13 +277,13 @@ mod tests {
             v: &mut v,
             inverse_mass,
         };
-        let free = vec![Vec3::zeros(); n];
-        let normals = if normals.is_empty() { &free } else { normals };
+        let free = vec![Floor::NONE; n];
+        let floors = if floors.is_empty() { &free } else { floors };
         let mut limiter = StrainLimiter::new(springs, n);
         let corrections = if moved.is_empty() {
-            limiter.limit(springs, 0.1, &mut m, normals)
+            limiter.limit(springs, 0.1, &mut m, floors)
         } else {
-            limiter.limit_around(springs, 0.1, &mut m, normals, moved)
+            limiter.limit_around(springs, 0.1, &mut m, floors, moved)
         };
         (corrections, v)
     }
@@ -304,21 +326,18 @@ mod tests {
     }
 
     #[test]
-    fn a_contact_vertex_is_not_pushed_into_the_body() {
-        // Squashed to half: lengthening would move b along +x, into the body behind its
-        // contact plane (normal −x), so only a moves, and all the way.
+    fn a_vertex_near_the_body_stops_at_its_floor() {
+        // Squashed to half: lengthening moves b 0.2 along +x, towards the body behind its
+        // floor x ≤ 0.6 (normal −x); b stops there, a takes the rest of the correction.
         let (springs, mut x) = chain(&[0.5]);
-        let b = x[1];
-        let (_, v) = run(
-            &springs,
-            &[1.0, 1.0],
-            &mut x,
-            &[Vec3::zeros(), -Vec3::x()],
-            &[],
-        );
-        assert_eq!(x[1], b);
+        let floor = Floor {
+            normal: -Vec3::x(),
+            offset: -0.6,
+        };
+        let (_, v) = run(&springs, &[1.0, 1.0], &mut x, &[Floor::NONE, floor], &[]);
+        assert!((x[1].x - 0.6).abs() < 1e-12, "{x:?}");
         assert!(((x[1] - x[0]).norm() - 0.9).abs() < 1e-12, "{x:?}");
-        assert!(x[0].x < 0.0 && v[0].x < 0.0);
+        assert!(x[0].x < 0.0 && v[0].x < 0.0 && v[1].x > 0.0);
     }
 
     #[test]

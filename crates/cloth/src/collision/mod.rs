@@ -20,8 +20,10 @@
 //! 2. **Friction, after the solve** ([`Collisions::friction`]). The constraint impulse j is
 //!    what the solve's residual leaves on a contact vertex (M Δv − h f); Coulomb friction
 //!    removes up to μ jₙ / m of the tangential velocity relative to the body (Bridson et al.
-//!    §7.2). The simulator then limits strain (`crate::strain_limit`), contact vertices
-//!    sliding on their planes, so friction cannot hold an edge stretched.
+//!    §7.2). The simulator then limits strain (`crate::strain_limit`), so friction cannot hold
+//!    an edge stretched; vertices near the body are kept above a floor at three quarters of
+//!    the thickness ([`Collisions::floors`]), so the limiter does not push them in for the
+//!    projection to push back out.
 //! 3. **Self repulsion** ([`Collisions::repel`]): for every vertex within the thickness of a
 //!    face of the garment, an impulse that stops the pair approaching and starts separating it
 //!    by a tenth of the overlap per step (Bridson et al. §7.1). Stopping an approach at once
@@ -60,6 +62,7 @@ use tailor_subdiv::Point;
 
 use crate::constraint::Contact;
 use crate::energy::Vec3;
+use crate::strain_limit::Floor;
 use crate::{ClothError, Model, Settings};
 
 /// How much heavier a vertex resting on the body is in the self-collision passes.
@@ -201,6 +204,15 @@ impl Collisions {
         self.obstacle.as_ref().map_or(0, |obstacle| {
             obstacle.missed_contacts(settings.thickness, h, x0, x, free, &mut self.contacts)
         })
+    }
+
+    /// The floors of strain limiting for the substep of length `h` (see
+    /// [`Obstacle::floors`]): none without an obstacle.
+    pub fn floors(&self, settings: &Settings, h: f64, x0: &[Point], out: &mut [Floor]) {
+        out.fill(Floor::NONE);
+        if let Some(obstacle) = &self.obstacle {
+            obstacle.floors(settings.thickness, h, x0, out);
+        }
     }
 
     /// Coulomb friction on the body contacts (step 2 of the module docs); `residual` is

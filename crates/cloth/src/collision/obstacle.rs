@@ -18,6 +18,7 @@ use super::Motion;
 use super::surface::Surface;
 use crate::constraint::Contact;
 use crate::energy::Vec3;
+use crate::strain_limit::Floor;
 use crate::{ClothError, Settings};
 
 /// Rounds of the continuous pass: each re-tests the paths the last one changed.
@@ -26,6 +27,10 @@ const IMPACT_ROUNDS: usize = 4;
 /// How far past half the thickness the projection puts a vertex, relative to it, so that the
 /// distance measured afterwards is not below half the thickness by rounding.
 const PROJECTION_SLACK: f64 = 1e-6;
+
+/// Height of strain limiting's floor above the body, in thicknesses: above the half that the
+/// projection enforces, below the whole that contacts hold.
+const FLOOR: f64 = 0.75;
 
 /// A moving polygon mesh the garment collides with.
 #[derive(Clone, Debug)]
@@ -202,6 +207,22 @@ impl Obstacle {
             }
         }
         out.len() - before
+    }
+
+    /// For every vertex with a closest body point at the last [`Self::find_contacts`], the
+    /// floor of strain limiting: the plane through that point as the body carries it to the
+    /// end of the substep of length `h`, raised by [`FLOOR`] times the thickness.
+    pub fn floors(&self, thickness: f64, h: f64, x0: &[Point], out: &mut [Floor]) {
+        for (i, c) in self.closest.iter().enumerate() {
+            if let Some(c) = c {
+                let (normal, _) = away_from(x0[i], c);
+                let end = c.point + self.velocity_at(c) * h;
+                out[i] = Floor {
+                    normal,
+                    offset: normal.dot(&end.coords) + FLOOR * thickness,
+                };
+            }
+        }
     }
 
     /// Puts back on the front of a body face every vertex whose path over the substep enters
