@@ -3,7 +3,8 @@
 //! needs), refinement of positions (minimal topology plus positions), stencil table
 //! construction, and applying a stencil table to new positions (the per-frame cost of a cloth
 //! simulation) against the [`tailor_subdiv::Evaluator`] (regular faces as B-spline patches)
-//! that replaces it. `compare-osd/` times the same cases against OpenSubdiv itself. Throughput is in refined faces per second; the
+//! that replaces it, and the floor under both (writing as many points). `compare-osd/` times
+//! the same cases against OpenSubdiv itself. Throughput is in refined faces per second; the
 //! allocation profiler's "max alloc" row is the peak memory a run holds.
 //!
 //! `cargo bench -p tailor-subdiv --bench refine` (set `RAYON_NUM_THREADS=1` for one thread).
@@ -12,6 +13,7 @@
 use common::grid;
 use divan::counter::ItemsCount;
 use divan::{AllocProfiler, Bencher, black_box};
+use rayon::prelude::*;
 use tailor_subdiv::{Mesh, Point, Refiner};
 
 mod common;
@@ -95,6 +97,19 @@ fn evaluator_apply(bencher: Bencher, &(side, level): &(usize, usize)) {
     bencher
         .counter(refined_faces(side, level))
         .bench_local(|| evaluator.apply(black_box(mesh.positions()), &mut out));
+}
+
+/// The floor under `evaluator_apply`: writing as many points, a constant in parallel chunks.
+#[divan::bench(args = cases(), sample_count = 10)]
+fn write_floor(bencher: Bencher, &(side, level): &(usize, usize)) {
+    let points = Refiner::for_evaluation(&grid(side), level)
+        .evaluator()
+        .len();
+    let mut out = vec![Point::origin(); points];
+    bencher.counter(refined_faces(side, level)).bench_local(|| {
+        let value = black_box(Point::new(1.0, 2.0, 3.0));
+        out.par_chunks_mut(4096).for_each(|chunk| chunk.fill(value));
+    });
 }
 
 #[divan::bench(args = cases(), sample_count = 10)]

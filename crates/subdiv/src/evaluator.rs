@@ -13,25 +13,35 @@
 //! as `REGULAR` B-spline patches and only the others as Gregory patches or stencils.
 //!
 //! The [`Evaluator`] gathers a regular quad's 16 control points (64 bytes of indices), refines
-//! its four control columns (`W P`), then computes each point it writes as a row of `W P`
-//! times a row of `W`: four products per point instead of ten. Faces come in the order of the
-//! control mesh; when a quad follows its left neighbour, the same way round (the common case in
-//! a grid-like garment), three of its columns are the neighbour's and only one is gathered and
-//! refined. At level 1 a quad owns three points, too few to pay for its 16 gathers, so there (and
-//! above level 4) the evaluator applies the stencil table as it is.
+//! its four control columns (`W P`), then the points it writes, a line of constant `x` at a
+//! time: the points `(x, 1..=2^N)` are `Σ_b W[x][b] · (W P)[.., b]`, one weighted sum of four
+//! contiguous runs of numbers, which the compiler turns into full-width (two-lane SSE2) vector
+//! arithmetic, three or four products per point with the zeros of `W` skipped. The points land
+//! in a small grid, and from there in their blocks of the output, one contiguous run per
+//! segment (`patches.rs`). Faces come in the order of the control mesh; when a quad follows
+//! its left neighbour, the same way round (the common case in a grid-like garment), three of
+//! its columns are the neighbour's (kept in a ring) and only one is gathered and refined. At
+//! level 1 a quad owns three points, too few to pay for its 16 gathers, so there (and above
+//! level 4) the evaluator applies the stencil table as it is.
 //!
-//! Each refined point has one writer: a control vertex's vertex point its stencil row; a point
-//! inside a regular quad, or on an edge that first appears in a regular quad, that quad; any
-//! other point its stencil row. Writers are grouped in fixed runs of faces that own disjoint
+//! Each refined point has one writer: a point inside a regular quad, or on an edge that first
+//! appears in a regular quad, that quad; a control vertex's vertex point the first regular quad
+//! of its run with that corner; any other point its stencil row (copied, in the order they are
+//! used, next to the patches). Writers are grouped in fixed runs of faces that own disjoint
 //! ranges of the output, so evaluation is parallel, and every point is computed by the same
 //! arithmetic whatever the thread count. Results equal the stencil table's to rounding (about
 //! 1e-16 relative; the tests hold them to 1e-12).
+//!
+//! A level-2 frame of a 100k-quad mesh writes 38 MB, more than a 32 MB L3 cache holds; on two
+//! cores the evaluator takes a little over twice as long as writing that much and nothing else
+//! (`write_floor` in `benches/refine.rs`), the rest being the arithmetic.
 
 use rayon::prelude::*;
 
-use crate::patches::{Patch, RegularPatches};
+use crate::patches::{CORNER_POINTS, Patch, RegularPatches};
 use crate::refiner::Refiner;
-use crate::sparse::{Primvar, SharedRows, apply_rows, weighted_sum};
+use crate::rules::bspline;
+use crate::sparse::{Primvar, weighted_sum};
 use crate::stencil::StencilTable;
 
 /// Refined points of a fixed topology as a function of its control points, for evaluation
@@ -54,7 +64,7 @@ impl Evaluator {
                 refiner.level(0),
                 refiner.levels(),
                 &last.child.face_verts,
-                last.child.vertex_count,
+                &stencils.rows,
             )
         });
         Self { stencils, patches }
@@ -75,11 +85,10 @@ impl Evaluator {
             "control point count"
         );
         assert_eq!(out.len(), self.stencils.len(), "destination length");
-        let rows = &self.stencils.rows;
         match control.first().map_or(0, |c| c.components().len()) {
-            1 => by_level::<T, 1>(patches, rows, control, out),
-            2 => by_level::<T, 2>(patches, rows, control, out),
-            3 => by_level::<T, 3>(patches, rows, control, out),
+            1 => by_level::<T, 1>(patches, control, out),
+            2 => by_level::<T, 2>(patches, control, out),
+            3 => by_level::<T, 3>(patches, control, out),
             _ => self.stencils.apply(control, out),
         }
     }
@@ -128,16 +137,11 @@ impl Evaluator {
 }
 
 /// Evaluates values of `D` components with patches.
-fn by_level<T: Primvar, const D: usize>(
-    p: &RegularPatches,
-    rows: &SharedRows,
-    control: &[T],
-    out: &mut [T],
-) {
+fn by_level<T: Primvar, const D: usize>(p: &RegularPatches, control: &[T], out: &mut [T]) {
     match p.levels {
-        2 => apply_patches::<T, D, 5>(p, rows, control, out),
-        3 => apply_patches::<T, D, 9>(p, rows, control, out),
-        4 => apply_patches::<T, D, 17>(p, rows, control, out),
+        2 => apply_patches::<T, D, 5>(p, control, out),
+        3 => apply_patches::<T, D, 9>(p, control, out),
+        4 => apply_patches::<T, D, 17>(p, control, out),
         _ => unreachable!("patches are built for levels 2 to 4"),
     }
 }
@@ -146,16 +150,14 @@ fn by_level<T: Primvar, const D: usize>(
 /// (`S = 2^levels + 1`).
 fn apply_patches<T: Primvar, const D: usize, const S: usize>(
     p: &RegularPatches,
-    rows: &SharedRows,
     control: &[T],
     out: &mut [T],
 ) {
-    let weights: &[[f64; 4]; S] = p.weights.as_slice().try_into().expect("S = 2^levels + 1");
-    let (vertex_points, mut rest) = out.split_at_mut(p.segments[1].start);
-    // Cut every face and edge segment into the runs' ranges, run-major.
-    let segments = &p.segments[1..];
+    // Cut every segment into the runs' ranges, run-major.
+    let segments = &p.segments;
     let runs = p.chunks.len() - 1;
     let mut pieces: Vec<&mut [T]> = (0..runs * segments.len()).map(|_| &mut [][..]).collect();
+    let mut rest = out;
     for (s, seg) in segments.iter().enumerate() {
         for (c, run) in p.chunks.windows(2).enumerate() {
             let len = seg.block(run[1].index(seg.owner)) - seg.block(run[0].index(seg.owner));
@@ -164,100 +166,252 @@ fn apply_patches<T: Primvar, const D: usize, const S: usize>(
             rest = tail;
         }
     }
-    rayon::join(
-        || apply_rows(vertex_points.len(), |i| rows.row(i), control, vertex_points),
-        || {
-            pieces
-                .par_chunks_mut(segments.len())
-                .enumerate()
-                .for_each(|(c, slices)| {
-                    let (lo, hi) = (&p.chunks[c], &p.chunks[c + 1]);
-                    let mut kernel = Kernel::<D, S>::new(weights);
-                    for patch in &p.patches[lo.patch as usize..hi.patch as usize] {
-                        kernel.columns(control, patch);
-                        p.patch_blocks(lo, patch, |s, start, points| {
-                            let block = &mut slices[s][start..start + points.len()];
-                            for (out, &[x, y]) in block.iter_mut().zip(points) {
-                                let point = kernel.point(usize::from(x), usize::from(y));
-                                out.components_mut().copy_from_slice(&point);
-                            }
-                        });
-                    }
-                    // The rest of the run's points, in increasing order, from their rows.
-                    let mut s = 0;
-                    for &i in &p.irregular[lo.irregular as usize..hi.irregular as usize] {
-                        let i = i as usize;
-                        while i >= segments[s].block(hi.index(segments[s].owner)) {
-                            s += 1;
-                        }
-                        let start = segments[s].block(lo.index(segments[s].owner));
-                        slices[s][i - start] = weighted_sum(rows.row(i), control);
+    pieces
+        .par_chunks_mut(segments.len())
+        .enumerate()
+        .for_each(|(c, slices)| {
+            let (lo, hi) = (&p.chunks[c], &p.chunks[c + 1]);
+            let mut kernel = Kernel::<D, S>::new();
+            for patch in &p.patches[lo.patch as usize..hi.patch as usize] {
+                kernel.patch(control, patch);
+                let grid = kernel.grid.as_flattened();
+                p.patch_runs(lo, patch, |s, start, points| {
+                    let block = &mut slices[s][start..start + points.len()];
+                    for (out, &g) in block.iter_mut().zip(points) {
+                        out.components_mut().copy_from_slice(&grid[usize::from(g)]);
                     }
                 });
-        },
-    );
+                for (j, &k) in CORNER_POINTS.iter().enumerate() {
+                    if patch.corners & (1 << j) != 0 {
+                        let [x, y] = Kernel::<D, S>::corner(j);
+                        let v = (patch.points[k] - lo.vertex) as usize;
+                        slices[0][v]
+                            .components_mut()
+                            .copy_from_slice(&kernel.grid[x][y]);
+                    }
+                }
+            }
+            // The rest of the run's points, in increasing order, from their rows.
+            let mut s = 0;
+            for k in lo.irregular as usize..hi.irregular as usize {
+                let i = p.irregular[k] as usize;
+                while i >= segments[s].block(hi.index(segments[s].owner)) {
+                    s += 1;
+                }
+                let start = segments[s].block(lo.index(segments[s].owner));
+                slices[s][i - start] = weighted_sum(p.irregular_rows.row(k), control);
+            }
+        });
 }
 
 /// Evaluates patches one after another: `W P Wᵀ` for a patch's 4 × 4 control points `P` and
-/// the 1D rule `W` (`S × 4`), control columns first (`W P`, kept), then each point written
-/// (a row of `W P` times a row of `W`). A patch that follows its neighbour across edge 3
-/// shares three control columns with it, so only its new column is gathered and refined.
-/// Plain loops over small arrays of `D` numbers, which the compiler unrolls and keeps in
-/// registers.
-struct Kernel<'a, const D: usize, const S: usize> {
-    w: &'a [[f64; 4]; S],
-    /// `W P` by control column: `columns[b][y]`.
+/// the 1D rule `W` (`S × 4`, a compile-time table), control columns first (`W P`, kept), then
+/// the grid points the patch writes, line by line: the points `(x, y)` of a line of constant
+/// `x` are `Σ_b W[x][b] · (W P)[y][b]`, one combination of four contiguous runs of numbers,
+/// which the compiler turns into full-width vector arithmetic. The caller copies the points
+/// out of the grid into their blocks. A patch that follows its neighbour across edge 3 shares
+/// three control columns with it, so only its new column is gathered and refined; the columns
+/// are a ring, so none is moved.
+///
+/// Sizes are constants, so the compiler unrolls the arithmetic on a run of points into
+/// straight-line vector code; the zeros of `W` are skipped ([`Row`]: a level-2 point combines
+/// three or four columns, not always four).
+struct Kernel<const D: usize, const S: usize> {
+    /// `W P` by control column: column `b` of the current patch is `columns[(head + b) % 4]`,
+    /// indexed by `y`.
     columns: [[[f64; D]; S]; 4],
+    head: usize,
+    /// The current patch's refined points, `grid[x][y]`: current where the patch writes.
+    grid: [[[f64; D]; S]; S],
 }
 
-impl<'a, const D: usize, const S: usize> Kernel<'a, D, S> {
-    fn new(w: &'a [[f64; 4]; S]) -> Self {
+/// Points of a line computed at once (twelve numbers, six SSE2 registers, for a point of three
+/// components): `S − 1 = 2^levels` is a multiple of four from level 2 on.
+const RUN: usize = 4;
+
+/// A row of `W` and the range of its non-zero weights (contiguous for a B-spline rule),
+/// known at compile time.
+#[derive(Clone, Copy)]
+struct Row {
+    /// Weights of the four control columns (or rows).
+    w: [f64; 4],
+    /// The non-zero weights are `w[first..end]`.
+    first: usize,
+    end: usize,
+}
+
+impl Row {
+    /// The rows of [`bspline::span_table`].
+    const fn table<const S: usize>() -> [Self; S] {
+        let w = bspline::span_table::<S>();
+        let mut rows = [Self {
+            w: [0.0; 4],
+            first: 0,
+            end: 0,
+        }; S];
+        let mut i = 0;
+        while i < S {
+            let (mut first, mut end) = (0, 4);
+            while w[i][first] == 0.0 {
+                first += 1;
+            }
+            while w[i][end - 1] == 0.0 {
+                end -= 1;
+            }
+            rows[i] = Self {
+                w: w[i],
+                first,
+                end,
+            };
+            i += 1;
+        }
+        rows
+    }
+}
+
+impl<const D: usize, const S: usize> Kernel<D, S> {
+    const W: [Row; S] = Row::table::<S>();
+
+    fn new() -> Self {
         Self {
-            w,
             columns: [[[0.0; D]; S]; 4],
+            head: 0,
+            grid: [[[0.0; D]; S]; S],
         }
     }
 
-    /// Makes `W P` for `patch`.
+    /// Makes the grid points `patch` writes: its interior and the points of the edges it
+    /// owns (edge j's run from corner j: `(t, 0)`, `(S − 1, t)`, `(t, S − 1)`, `(0, t)`).
+    /// Lines run over `y = 1..S`, edge 2's point and corners included whether or not the
+    /// patch writes them; edge 0 is made point by point.
     #[inline]
-    fn columns<T: Primvar>(&mut self, control: &[T], patch: &Patch) {
+    fn patch<T: Primvar>(&mut self, control: &[T], patch: &Patch) {
         if patch.follows {
-            self.columns.copy_within(1..4, 0);
+            self.head = (self.head + 1) % 4;
             self.column(control, patch, 3);
         } else {
             for b in 0..4 {
                 self.column(control, patch, b);
             }
         }
-    }
-
-    /// `W` times control column `b` of `patch`.
-    #[inline]
-    fn column<T: Primvar>(&mut self, control: &[T], patch: &Patch, b: usize) {
-        let mut p = [[0.0; D]; 4];
-        for (a, value) in p.iter_mut().enumerate() {
-            value.copy_from_slice(control[patch.points[4 * a + b] as usize].components());
+        let owns = |j: u8| patch.owned & (1 << j) != 0;
+        for x in 1..S - 1 {
+            self.line(x);
         }
-        for (out, w) in self.columns[b].iter_mut().zip(self.w) {
-            let mut value = [0.0; D];
-            for (pa, &wa) in p.iter().zip(w) {
-                for c in 0..D {
-                    value[c] += wa * pa[c];
-                }
+        if owns(1) {
+            self.line(S - 1);
+        }
+        if owns(3) {
+            self.line(0);
+        }
+        if owns(0) {
+            for x in 1..S - 1 {
+                self.point(x, 0);
             }
-            *out = value;
+        }
+        for j in 0..4 {
+            if patch.corners & (1 << j) != 0 {
+                let [x, y] = Self::corner(j);
+                self.point(x, y);
+            }
         }
     }
 
-    /// Refined point (x, y) of the current patch.
-    #[inline]
-    fn point(&self, x: usize, y: usize) -> [f64; D] {
-        let w = &self.w[x];
-        let [a, b, c, d] = [0, 1, 2, 3].map(|k| &self.columns[k][y]);
-        let mut point = [0.0; D];
-        for (k, p) in point.iter_mut().enumerate() {
-            *p = w[0] * a[k] + w[1] * b[k] + w[2] * c[k] + w[3] * d[k];
+    /// Where corner `j` is in the grid.
+    #[inline(always)]
+    fn corner(j: usize) -> [usize; 2] {
+        [[0, 0], [S - 1, 0], [S - 1, S - 1], [0, S - 1]][j]
+    }
+
+    /// Grid point `(x, y)` on its own.
+    #[inline(always)]
+    fn point(&mut self, x: usize, y: usize) {
+        let columns = ring(&self.columns, self.head);
+        combine(
+            &Self::W[x],
+            columns.map(|c| std::array::from_ref(&c[y])),
+            std::array::from_mut(&mut self.grid[x][y]),
+        );
+    }
+
+    /// Grid line `x`, points `1..S`, [`RUN`] at a time.
+    #[inline(always)]
+    fn line(&mut self, x: usize) {
+        let runs = ring(&self.columns, self.head).map(|c| c[1..].as_chunks::<RUN>().0);
+        let (out, _) = self.grid[x][1..].as_chunks_mut::<RUN>();
+        for (k, out) in out.iter_mut().enumerate() {
+            combine(&Self::W[x], runs.map(|r| &r[k]), out);
         }
-        point
+    }
+
+    /// `W` times control column `b` of `patch`, into its place in the ring.
+    #[inline(always)]
+    fn column<T: Primvar>(&mut self, control: &[T], patch: &Patch, b: usize) {
+        let p: [[[f64; D]; 1]; 4] = std::array::from_fn(|a| {
+            let mut value = [0.0; D];
+            value.copy_from_slice(control[patch.points[4 * a + b] as usize].components());
+            [value]
+        });
+        let column = &mut self.columns[(self.head + b) % 4];
+        for (out, w) in column.iter_mut().zip(&Self::W) {
+            combine(w, [&p[0], &p[1], &p[2], &p[3]], std::array::from_mut(out));
+        }
+    }
+}
+
+/// Control columns `0..4` of the current patch, in the ring `columns` that starts at `head`.
+#[inline(always)]
+fn ring<const D: usize, const S: usize>(
+    columns: &[[[f64; D]; S]; 4],
+    head: usize,
+) -> [&[[f64; D]; S]; 4] {
+    std::array::from_fn(|b| &columns[(head + b) % 4])
+}
+
+/// `out = Σ_k w[k] · values[k]` elementwise over the non-zero weights of `row`, in order of
+/// `k`: a loop over three or four weights around straight-line, full-width arithmetic on `N`
+/// points, whether or not the row is known at compile time.
+#[inline(always)]
+fn combine<const D: usize, const N: usize>(
+    row: &Row,
+    values: [&[[f64; D]; N]; 4],
+    out: &mut [[f64; D]; N],
+) {
+    let Row { w, first, end } = *row;
+    let mut sum = [[0.0; D]; N];
+    for (s, v) in sum.iter_mut().zip(values[first]) {
+        for (s, &v) in s.iter_mut().zip(v) {
+            *s = w[first] * v;
+        }
+    }
+    for k in first + 1..end {
+        for (s, v) in sum.iter_mut().zip(values[k]) {
+            for (s, &v) in s.iter_mut().zip(v) {
+                *s += w[k] * v;
+            }
+        }
+    }
+    *out = sum;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn level_two_rows_skip_their_zeros() {
+        let taps: Vec<(usize, usize)> =
+            Row::table::<5>().iter().map(|r| (r.first, r.end)).collect();
+        assert_eq!(taps, [(0, 3), (0, 3), (0, 4), (1, 4), (1, 4)]);
+        for (row, w) in Row::table::<9>().iter().zip(bspline::span_weights(3)) {
+            assert_eq!(row.w, w);
+            assert!(
+                w[..row.first]
+                    .iter()
+                    .chain(&w[row.end..])
+                    .all(|&x| x == 0.0)
+            );
+            assert!(w[row.first..row.end].iter().all(|&x| x > 0.0));
+        }
     }
 }

@@ -16,16 +16,20 @@
 //! last-level vertices that hold one block per control vertex, face, face corner or edge, in
 //! that component's order. A regular face writes its interior points, and the points of the
 //! edges that first appear in it (level-0 edges are numbered by first appearance, so a run of
-//! faces owns a run of edges), into its blocks ([`Block`]): which grid point goes to which
-//! slot is read off the refined topology of one regular face, then checked on every other. So
-//! a run of faces writes disjoint, contiguous ranges of every segment, which is what lets
-//! [`crate::Evaluator`] fill the output in parallel without sharing a slot. Vertex points, and
-//! every point a regular face does not write, keep their stencil rows.
+//! faces owns a run of edges), into its blocks: which grid point goes to which slot is read
+//! off the refined topology of one regular face, then checked on every other. A face's blocks
+//! in a segment are consecutive, and so are the edges it owns, so a face writes one run of
+//! slots per segment ([`Slots`]). Vertex points are numbered like the control vertices, which
+//! follow no face order; a run of faces takes the range of vertices from the lowest corner of
+//! its faces on, and each of those vertices is written by the first of the run's regular faces
+//! with that corner. So a run of faces writes disjoint, contiguous ranges of every segment,
+//! which is what lets [`crate::Evaluator`] fill the output in parallel without sharing a slot.
+//! Every point of a run's ranges that no regular face writes keeps its stencil row.
 
 use rayon::prelude::*;
 
 use crate::mesh::to_u32;
-use crate::rules::bspline;
+use crate::sparse::{SharedRows, SharedRowsBuilder};
 use crate::topology::{Csr, Level};
 
 /// Levels with patches: at level 1 a quad owns three points, too few to beat their stencil
@@ -119,15 +123,33 @@ pub(crate) struct Write {
     pub grid: u16,
 }
 
-/// A component's block in one segment, as a patch writes it: slot `k` gets the grid point
-/// `slots.start + k` of the template.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub(crate) struct Block {
-    /// Index into the segment list.
-    pub segment: usize,
-    /// Where the block's slots are in the template.
-    pub slots: std::ops::Range<usize>,
+/// The grid points ([`grid_index`]) a patch writes into each segment after the first, in
+/// slot order: row `pattern · segments + segment` (segment 0's rows are empty). A face or corner segment's row
+/// is the same for every patch and kept at `pattern` 0; an edge segment's holds the blocks of
+/// the patch's owned edges one after another, so it depends on [`Patch::pattern`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Slots {
+    /// Row starts; one more than there are rows.
+    offsets: Vec<u32>,
+    /// Grid points.
+    grid: Vec<u16>,
 }
+
+impl Slots {
+    /// Row `i`.
+    #[inline]
+    fn row(&self, i: usize) -> &[u16] {
+        &self.grid[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// Memory held, in bytes.
+    fn bytes(&self) -> usize {
+        self.offsets.len() * 4 + self.grid.len() * 2
+    }
+}
+
+/// Edge ownership and direction patterns ([`Patch::pattern`]).
+const PATTERNS: usize = 256;
 
 /// A regular control face: its 4 × 4 control points and where its blocks start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -145,14 +167,31 @@ pub(crate) struct Patch {
     pub owned: u8,
     /// Bit `j`: edge `j` runs from corner `j + 1` to corner `j` (against the face).
     pub flipped: u8,
+    /// Bit `j`: this patch writes corner `j`'s vertex point (the first patch of its run with
+    /// that corner, when the vertex is in the run's range).
+    pub corners: u8,
     /// The first three control columns are the previous patch's last three (it is the
     /// neighbour across edge 3, the same way round, in the same run): the kernel reuses them.
     pub follows: bool,
 }
 
-/// Where each face's and edge's components start, for a run of faces.
+/// Where a patch's corners are in [`Patch::points`].
+pub(crate) const CORNER_POINTS: [usize; 4] = [5, 6, 10, 9];
+
+impl Patch {
+    /// Which edges the patch owns and which way they run, as a row group of [`Slots`].
+    #[inline]
+    pub fn pattern(&self) -> usize {
+        usize::from(self.owned | self.flipped << 4)
+    }
+}
+
+/// Where each vertex's, face's and edge's components start, for a run of faces.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Starts {
+    /// First vertex: the lowest corner of the faces at or after the first face, so that a
+    /// run's faces mostly find their corners in its range.
+    pub vertex: u32,
     /// First face.
     pub face: u32,
     /// Its first corner.
@@ -170,7 +209,7 @@ impl Starts {
     #[inline]
     pub fn index(&self, owner: Owner) -> usize {
         match owner {
-            Owner::Vertex => 0,
+            Owner::Vertex => self.vertex as usize,
             Owner::Face => self.face as usize,
             Owner::Corner => self.corner as usize,
             Owner::Edge => self.edge as usize,
@@ -183,19 +222,10 @@ impl Starts {
 pub(crate) struct RegularPatches {
     /// Refinement level.
     pub levels: usize,
-    /// `span_weights(levels)`: the 1D rule of the tensor product.
-    pub weights: Vec<[f64; 4]>,
     /// The segments of the last level; the first is the control vertices' vertex points.
     pub segments: Vec<Segment>,
-    /// A patch's blocks in the face and corner segments, in segment order.
-    pub face_blocks: Vec<Block>,
-    /// The grid point (x, y) of each slot of the face blocks.
-    pub face_points: Vec<[u8; 2]>,
-    /// The blocks of an edge a patch owns, in the edge segments.
-    pub edge_blocks: Vec<Block>,
-    /// The grid point of each slot of the edge blocks, for edge `j` of a patch running along
-    /// it (`[j][0]`) or against it (`[j][1]`).
-    pub edge_points: [[Vec<[u8; 2]>; 2]; 4],
+    /// The grid points a patch writes into each segment.
+    pub slots: Slots,
     /// Regular faces, in face order.
     pub patches: Vec<Patch>,
     /// Runs of faces evaluated as one task; one more than there are runs.
@@ -203,6 +233,9 @@ pub(crate) struct RegularPatches {
     /// Last-level vertices in face and edge blocks that no patch writes, run by run, in
     /// increasing order.
     pub irregular: Vec<u32>,
+    /// Their stencil rows, in the same order: read in sequence, not picked out of the whole
+    /// table a cache miss at a time.
+    pub irregular_rows: SharedRows,
 }
 
 /// Faces per task: about 4096 refined points.
@@ -212,13 +245,13 @@ fn faces_per_chunk(levels: usize) -> usize {
 
 impl RegularPatches {
     /// The regular patches of `base` refined `levels` times, `last_faces` being the last
-    /// level's face → vertices and `last_vertices` its vertex count. `None` when there are
-    /// none, or outside [`LEVELS`].
+    /// level's face → vertices and `stencils` the last level's stencil rows. `None` when there
+    /// are none, or outside [`LEVELS`].
     pub fn new(
         base: &Level,
         levels: usize,
         last_faces: &Csr,
-        last_vertices: usize,
+        stencils: &SharedRows,
     ) -> Option<Self> {
         if !LEVELS.contains(&levels) {
             return None;
@@ -230,7 +263,7 @@ impl RegularPatches {
             base.edge_count(),
         ];
         let (segments, total) = segments(levels, counts);
-        assert_eq!(total, last_vertices, "refined vertex count");
+        assert_eq!(total, stencils.rows(), "refined vertex count");
         let edge_start = edge_starts(base)?;
         let regular = regular_vertices(base);
         let grids = Grids {
@@ -266,30 +299,15 @@ impl RegularPatches {
             let (before, after) = (patches[i - 1].points, patches[i].points);
             patches[i].follows = (0..16).all(|k| k % 4 == 3 || after[k] == before[k + 1]);
         }
-        let (face_blocks, face_points) = blocks(&face_writes, |g| xy(side, g));
-        let (edge_blocks, edge_steps) = blocks(&edge_writes, |t| t);
-        let edge_points = std::array::from_fn(|j| {
-            [false, true].map(|flipped| {
-                edge_steps
-                    .iter()
-                    .map(|&t| {
-                        let t = if flipped { side - 1 - t } else { t };
-                        xy(side, edge_grid(side, j, t))
-                    })
-                    .collect()
-            })
-        });
+        let slots = slots(&segments, &face_writes, &edge_writes, side);
         let mut this = Self {
             levels,
-            weights: bspline::span_weights(levels),
             segments,
-            face_blocks,
-            face_points,
-            edge_blocks,
-            edge_points,
+            slots,
             patches,
             chunks: Vec::new(),
             irregular: Vec::new(),
+            irregular_rows: SharedRows::default(),
         };
         this.chunks = this.chunk_starts(base, &edge_start);
         for run in &this.chunks {
@@ -297,7 +315,14 @@ impl RegularPatches {
                 p.follows = false;
             }
         }
+        this.claim_corners();
         this.irregular = this.uncovered();
+        let mut rows = SharedRowsBuilder::default();
+        for &i in &this.irregular {
+            let (cols, weights) = stencils.row(i as usize);
+            rows.push_row(cols, weights);
+        }
+        this.irregular_rows = rows.finish();
         Some(this)
     }
 
@@ -305,14 +330,22 @@ impl RegularPatches {
     fn chunk_starts(&self, base: &Level, edge_start: &[u32]) -> Vec<Starts> {
         let faces = base.face_count();
         let per = faces_per_chunk(self.levels);
+        // The lowest corner of faces f.., which never decreases with f.
+        let mut lowest = vec![to_u32(base.vertex_count); faces + 1];
+        for f in (0..faces).rev() {
+            let corners = base.face_verts.row(f).iter().copied();
+            lowest[f] = corners.fold(lowest[f + 1], u32::min);
+        }
+        let runs = faces.div_ceil(per);
         let mut patch = 0;
-        (0..=faces.div_ceil(per))
+        (0..=runs)
             .map(|c| {
                 let face = (c * per).min(faces);
                 while patch < self.patches.len() && (self.patches[patch].face as usize) < face {
                     patch += 1;
                 }
                 Starts {
+                    vertex: if c == 0 { 0 } else { lowest[face] },
                     face: to_u32(face),
                     corner: base.face_verts.offsets[face],
                     edge: edge_start[face],
@@ -323,14 +356,37 @@ impl RegularPatches {
             .collect()
     }
 
-    /// The face and edge blocks' points that no patch writes, run by run; fills in
+    /// Gives each vertex point in a run's range to the first of the run's patches with that
+    /// vertex as a corner ([`Patch::corners`]).
+    fn claim_corners(&mut self) {
+        let mut claimed = Vec::new();
+        for run in self.chunks.windows(2) {
+            let (lo, hi) = (run[0], run[1]);
+            claimed.clear();
+            claimed.resize((hi.vertex - lo.vertex) as usize, false);
+            for p in &mut self.patches[lo.patch as usize..hi.patch as usize] {
+                for (j, &k) in CORNER_POINTS.iter().enumerate() {
+                    let Some(v) = p.points[k].checked_sub(lo.vertex) else {
+                        continue;
+                    };
+                    if let Some(slot) = claimed.get_mut(v as usize).filter(|c| !**c) {
+                        *slot = true;
+                        p.corners |= 1 << j;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The points of a run's ranges that no patch writes, run by run; fills in
     /// `chunks[..].irregular`.
     fn uncovered(&mut self) -> Vec<u32> {
         let per_chunk: Vec<Vec<u32>> = (0..self.chunks.len() - 1)
             .into_par_iter()
             .map(|c| {
                 let (lo, hi) = (self.chunks[c], self.chunks[c + 1]);
-                let ranges: Vec<std::ops::Range<usize>> = self.segments[1..]
+                let ranges: Vec<std::ops::Range<usize>> = self
+                    .segments
                     .iter()
                     .map(|s| s.block(lo.index(s.owner))..s.block(hi.index(s.owner)))
                     .collect();
@@ -341,14 +397,20 @@ impl RegularPatches {
                     len += r.len();
                 }
                 let mut covered = vec![false; len];
+                let mut cover = |at: usize| {
+                    assert!(!covered[at], "a refined point written twice");
+                    covered[at] = true;
+                };
                 for p in &self.patches[lo.patch as usize..hi.patch as usize] {
-                    self.patch_blocks(&lo, p, |segment, start, grid| {
+                    self.patch_runs(&lo, p, |segment, start, grid| {
                         let at = bases[segment] + start;
-                        for slot in &mut covered[at..at + grid.len()] {
-                            assert!(!*slot, "a refined point written twice");
-                            *slot = true;
-                        }
+                        (at..at + grid.len()).for_each(&mut cover);
                     });
+                    for (j, &k) in CORNER_POINTS.iter().enumerate() {
+                        if p.corners & (1 << j) != 0 {
+                            cover(bases[0] + (p.points[k] - lo.vertex) as usize);
+                        }
+                    }
                 }
                 ranges
                     .iter()
@@ -374,38 +436,21 @@ impl RegularPatches {
         irregular
     }
 
-    /// Every block patch `p` (of the run starting at `lo`) writes: `block(segment − 1, start
-    /// in the run's range of that segment, grid point (x, y) of each slot)`. Segment 0, the vertex
-    /// points, is never written by a patch.
+    /// The run of slots patch `p` (of the run of faces starting at `lo`) writes in each
+    /// segment after the first: `run(segment, start in the run's range of that segment,
+    /// grid point of each slot)`. Segment 0, the vertex points, is written corner by corner
+    /// ([`Patch::corners`]).
     #[inline]
-    pub fn patch_blocks(
-        &self,
-        lo: &Starts,
-        p: &Patch,
-        mut block: impl FnMut(usize, usize, &[[u8; 2]]),
-    ) {
-        let at = Starts {
-            face: p.face,
-            corner: p.corner,
-            edge: p.edge,
-            ..*lo
-        };
-        for b in &self.face_blocks {
-            let seg = &self.segments[b.segment];
-            let start = seg.unit * (at.index(seg.owner) - lo.index(seg.owner));
-            block(b.segment - 1, start, &self.face_points[b.slots.clone()]);
-        }
-        let mut edge = (p.edge - lo.edge) as usize;
-        for (j, points) in self.edge_points.iter().enumerate() {
-            if p.owned & (1 << j) == 0 {
-                continue;
-            }
-            let points = &points[usize::from(p.flipped & (1 << j) != 0)];
-            for b in &self.edge_blocks {
-                let unit = self.segments[b.segment].unit;
-                block(b.segment - 1, unit * edge, &points[b.slots.clone()]);
-            }
-            edge += 1;
+    pub fn patch_runs(&self, lo: &Starts, p: &Patch, mut run: impl FnMut(usize, usize, &[u16])) {
+        let n = self.segments.len();
+        for (s, seg) in self.segments.iter().enumerate().skip(1) {
+            let (component, row) = match seg.owner {
+                Owner::Face => (p.face - lo.face, s),
+                Owner::Corner => (p.corner - lo.corner, s),
+                Owner::Edge => (p.edge - lo.edge, p.pattern() * n + s),
+                Owner::Vertex => unreachable!("only segment 0 holds vertex points"),
+            };
+            run(s, seg.unit * component as usize, self.slots.row(row));
         }
     }
 
@@ -414,7 +459,8 @@ impl RegularPatches {
         self.patches.len() * size_of::<Patch>()
             + self.chunks.len() * size_of::<Starts>()
             + self.irregular.len() * 4
-            + (self.face_points.len() + 8 * self.edge_points[0][0].len()) * 2
+            + self.irregular_rows.bytes()
+            + self.slots.bytes()
     }
 }
 
@@ -431,29 +477,50 @@ pub(crate) fn edge_grid(s: usize, j: usize, t: usize) -> usize {
     y * s + x
 }
 
-/// Grid point `row_major` (side `s`) as (x, y).
-fn xy(s: usize, row_major: usize) -> [u8; 2] {
-    [row_major % s, row_major / s].map(|c| u8::try_from(c).expect("small grid"))
+/// Where the layout stores grid point `row_major` (`y · s + x`): column-major, `x · s + y`,
+/// because the kernel computes the grid by lines of constant `x`.
+fn grid_index(s: usize, row_major: usize) -> u16 {
+    let (x, y) = (row_major % s, row_major / s);
+    u16::try_from(x * s + y).expect("small grid")
 }
 
-/// Groups writes into blocks, one per segment in segment order, with the slots' values
-/// (`value` of each write's grid field) in offset order. The writes cover each block's slots
-/// exactly once ([`Grids::writes`] checks it).
-fn blocks<V>(writes: &[Write], value: impl Fn(usize) -> V) -> (Vec<Block>, Vec<V>) {
-    let mut sorted = writes.to_vec();
+/// The slot table of a level whose grids have side `s`, from the writes of one face's
+/// blocks and one edge's blocks (which cover each block's slots exactly once: [`Grids::writes`]
+/// checks it). A Segment's row lists its writes' grid points by offset; an edge segment's,
+/// for each pattern, those of edge 0, 1, 2, 3 in turn where owned, along the edge or (flipped)
+/// against it.
+fn slots(segments: &[Segment], face_writes: &[Write], edge_writes: &[Write], s: usize) -> Slots {
+    let mut sorted = [face_writes, edge_writes].concat();
     sorted.sort_unstable_by_key(|w| (w.segment, w.offset));
-    let mut blocks: Vec<Block> = Vec::new();
-    for (k, w) in sorted.iter().enumerate() {
-        match blocks.last_mut() {
-            Some(b) if b.segment == usize::from(w.segment) => b.slots.end = k + 1,
-            _ => blocks.push(Block {
-                segment: usize::from(w.segment),
-                slots: k..k + 1,
-            }),
+    let writes = |segment: usize| {
+        let at = |w: &Write| usize::from(w.segment).cmp(&segment);
+        let first = sorted.partition_point(|w| at(w).is_lt());
+        let end = sorted.partition_point(|w| at(w).is_le());
+        &sorted[first..end]
+    };
+    let mut table = Slots {
+        offsets: vec![0],
+        grid: Vec::new(),
+    };
+    for pattern in 0..PATTERNS {
+        for (i, seg) in segments.iter().enumerate() {
+            if seg.owner == Owner::Edge {
+                for j in (0..4).filter(|&j| pattern & (1 << j) != 0) {
+                    let flipped = pattern & (16 << j) != 0;
+                    table.grid.extend(writes(i).iter().map(|w| {
+                        let t = w.grid as usize;
+                        let t = if flipped { s - 1 - t } else { t };
+                        grid_index(s, edge_grid(s, j, t))
+                    }));
+                }
+            } else if pattern == 0 && seg.owner != Owner::Vertex {
+                let grid = writes(i).iter().map(|w| grid_index(s, w.grid as usize));
+                table.grid.extend(grid);
+            }
+            table.offsets.push(to_u32(table.grid.len()));
         }
     }
-    let values = sorted.iter().map(|w| value(w.grid as usize)).collect();
-    (blocks, values)
+    table
 }
 
 /// For each face, the first edge that first appears in it or later (level-0 edges are
@@ -722,6 +789,7 @@ impl Layout<'_> {
             edge: self.edge_start[f],
             owned,
             flipped,
+            corners: 0,
             follows: false,
         })
     }

@@ -139,6 +139,30 @@ fn big_regular_grid_matches() {
 }
 
 #[test]
+fn vertices_numbered_apart_from_the_faces_match() {
+    // Scrambled vertex numbers and faces listed backwards: runs of faces no longer find their
+    // corners in one range, so more vertex points keep their stencil rows.
+    let n = 40;
+    let base = grid(n);
+    let count = base.positions().len();
+    let renumber = |v: u32| (v as usize * 7919 % count) as u32;
+    let mut positions = vec![Point::origin(); count];
+    for (v, p) in base.positions().iter().enumerate() {
+        positions[renumber(v as u32) as usize] = *p;
+    }
+    let faces: Vec<Vec<u32>> = grid_faces(n)
+        .iter()
+        .rev()
+        .map(|f| f.iter().copied().map(renumber).collect())
+        .collect();
+    let mesh = Mesh::from_polygons(positions, &faces).unwrap();
+    for levels in 2..=4 {
+        let e = assert_matches(&mesh, levels, "scrambled grid");
+        assert_eq!(e.regular_faces(), (n - 2) * (n - 2));
+    }
+}
+
+#[test]
 fn irregular_vertices_and_faces_match() {
     let mesh = irregular_grid(10);
     for levels in 2..=4 {

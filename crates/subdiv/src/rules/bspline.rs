@@ -16,39 +16,54 @@
 /// exact in `f64` for any level a mesh can be refined to.
 #[must_use]
 pub fn span_weights(levels: usize) -> Vec<[f64; 4]> {
-    // Points over parameters -1 - .. 2, as weights of the control points; each step keeps the
-    // points whose rule has both neighbours, so the kept range shrinks towards [0, 1] by half
-    // a spacing on each side per level.
-    let mut points: Vec<[f64; 4]> = (0..4)
-        .map(|i| {
-            let mut w = [0.0; 4];
-            w[i] = 1.0;
-            w
-        })
-        .collect();
-    for _ in 0..levels {
-        let mut next = Vec::with_capacity(2 * points.len() - 1);
-        for i in 0..points.len() - 1 {
-            if i > 0 {
-                next.push(combine(
-                    &[points[i - 1], points[i], points[i + 1]],
-                    &[0.125, 0.75, 0.125],
-                ));
-            }
-            next.push(combine(&[points[i], points[i + 1]], &[0.5, 0.5]));
-        }
-        points = next;
-    }
-    // `points` now spans [-2^-levels, 1 + 2^-levels]: drop the outer two.
-    points[1..points.len() - 1].to_vec()
+    let levels = u32::try_from(levels).expect("a sensible level");
+    (0..=1i64 << levels).map(|i| point(levels, i)).collect()
 }
 
-fn combine(points: &[[f64; 4]], weights: &[f64]) -> [f64; 4] {
+/// [`span_weights`] as an array, at compile time, for kernels specialised on the number of
+/// points `S = 2^levels + 1`.
+///
+/// # Panics
+/// At compile time, if `S − 1` is not a power of two.
+#[must_use]
+pub const fn span_table<const S: usize>() -> [[f64; 4]; S] {
+    assert!(S >= 2 && (S - 1).is_power_of_two(), "S = 2^levels + 1");
+    let levels = (S - 1).trailing_zeros();
+    let mut table = [[0.0; 4]; S];
+    let mut i = 0;
+    while i < S {
+        table[i] = point(levels, i as i64);
+        i += 1;
+    }
+    table
+}
+
+/// The weights of level-`levels` point `i` (at parameter `i / 2^levels`, `−1 ≤ i ≤ 2^levels + 1`):
+/// at level 0 a control point; above, a vertex point `(a + 6b + c) / 8` (even `i`) or an edge
+/// point `(a + b) / 2` (odd `i`) of the level below. Those need the level below's points
+/// `⌊i/2⌋ − 1 ..= ⌊i/2⌋ + 1`, which stay in its range.
+const fn point(levels: u32, i: i64) -> [f64; 4] {
+    if levels == 0 {
+        let mut w = [0.0; 4];
+        w[(i + 1) as usize] = 1.0;
+        return w;
+    }
+    let h = i.div_euclid(2);
+    let (rule, first): (&[f64], i64) = if i.rem_euclid(2) == 0 {
+        (&[0.125, 0.75, 0.125], h - 1)
+    } else {
+        (&[0.5, 0.5], h)
+    };
     let mut out = [0.0; 4];
-    for (p, &w) in points.iter().zip(weights) {
-        for (o, &x) in out.iter_mut().zip(p) {
-            *o += w * x;
+    let mut r = 0;
+    while r < rule.len() {
+        let w = point(levels - 1, first + r as i64);
+        let mut k = 0;
+        while k < 4 {
+            out[k] += rule[r] * w[k];
+            k += 1;
         }
+        r += 1;
     }
     out
 }
@@ -84,6 +99,21 @@ mod tests {
         assert_eq!(w.len(), 5);
         assert_eq!(w[1], [1.0 / 16.0, 10.0 / 16.0, 5.0 / 16.0, 0.0]);
         assert_eq!(w[2], [1.0 / 64.0, 31.0 / 64.0, 31.0 / 64.0, 1.0 / 64.0]);
+    }
+
+    #[test]
+    fn compile_time_table_is_the_same_rule() {
+        let by_hand = [
+            [10.0, 44.0, 10.0, 0.0].map(|w| w / 64.0),
+            [1.0, 10.0, 5.0, 0.0].map(|w| w / 16.0),
+            [1.0, 31.0, 31.0, 1.0].map(|w| w / 64.0),
+            [0.0, 5.0, 10.0, 1.0].map(|w| w / 16.0),
+            [0.0, 10.0, 44.0, 10.0].map(|w| w / 64.0),
+        ];
+        assert_eq!(span_table::<5>(), by_hand);
+        assert_eq!(span_table::<3>().to_vec(), span_weights(1));
+        assert_eq!(span_table::<9>().to_vec(), span_weights(3));
+        assert_eq!(span_table::<17>().to_vec(), span_weights(4));
     }
 
     #[test]
