@@ -84,8 +84,10 @@ pub(crate) struct Collisions {
     held: Vec<f64>,
     /// The self-collision queries' answers, reused.
     layers: self_collision::Buffers,
-    /// The vertices the last repulsion moved.
+    /// The vertices the last repulsion (or body push) moved.
     repelled: Vec<bool>,
+    /// End positions before the body passes.
+    before: Vec<Point>,
 }
 
 /// The moving garment of one substep: start positions, and end positions and velocities the
@@ -160,6 +162,7 @@ impl Collisions {
             held: Vec::with_capacity(n),
             layers: self_collision::Buffers::default(),
             repelled: vec![false; n],
+            before: Vec::with_capacity(n),
         })
     }
 
@@ -289,8 +292,20 @@ impl Collisions {
             )?;
         }
         if let Some(obstacle) = &mut self.obstacle {
-            resolved += obstacle.resolve_impacts(&mut self.cloth, thickness, motion)?;
-            resolved += obstacle.project(thickness, motion)?;
+            self.before.clear();
+            self.before.extend_from_slice(motion.x);
+            let pushed = obstacle.resolve_impacts(&mut self.cloth, thickness, motion)?
+                + obstacle.project(thickness, motion)?;
+            if pushed > 0 {
+                // The pushes strain the edges around the pushed vertices: relax around them,
+                // then push out whatever that brought back within half the thickness.
+                self.repelled.clear();
+                self.repelled
+                    .extend(self.before.iter().zip(motion.x.iter()).map(|(a, b)| a != b));
+                relax(motion, &self.repelled);
+                resolved += obstacle.project(thickness, motion)?;
+            }
+            resolved += pushed;
             if let Some(surface) = &mut self.surface {
                 resolved += obstacle.clear_surface(surface, thickness, motion)?;
             }
