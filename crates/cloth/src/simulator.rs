@@ -159,7 +159,6 @@ struct Work {
     inverse_mass: Vec<f64>,
     /// The floors of strain limiting above the body.
     floors: Vec<Floor>,
-
     partials: Vec<f64>,
 }
 

@@ -33,7 +33,7 @@ pub const SWEEPS: usize = 64;
 /// How much heavier a vertex a collision pass moved is in [`StrainLimiter::limit_around`].
 const MOVED_MASS: f64 = 100.0;
 
-/// No fixed vertex reaches this vertex through edges.
+/// No source reaches this vertex through edges.
 const UNREACHED: u32 = u32::MAX;
 
 /// The strain limiter of one garment: its edges' vertex adjacency, built once, and the
@@ -43,7 +43,7 @@ pub(crate) struct StrainLimiter {
     /// Edges at each vertex, CSR.
     offsets: Vec<u32>,
     incident: Vec<u32>,
-    /// Edges by breadth-first depth from the fixed vertices, then the unreached ones.
+    /// Edges by breadth-first depth from the sources, then the unreached ones.
     order: Vec<u32>,
     depth: Vec<u32>,
     /// The vertices `order` starts from: fixed ones, and after a collision pass the ones it
@@ -51,6 +51,9 @@ pub(crate) struct StrainLimiter {
     sources: Vec<bool>,
     /// The inverse masses of [`Self::limit_around`].
     weights: Vec<f64>,
+    /// The breadth-first queue and the counting sort's bucket starts of [`Self::order_from`].
+    queue: Vec<u32>,
+    starts: Vec<u32>,
 }
 
 impl StrainLimiter {
@@ -78,6 +81,8 @@ impl StrainLimiter {
             depth: vec![UNREACHED; vertex_count],
             sources: vec![false; vertex_count],
             weights: Vec::with_capacity(vertex_count),
+            queue: Vec::with_capacity(vertex_count),
+            starts: Vec::with_capacity(vertex_count + 2),
         }
     }
 
@@ -93,10 +98,10 @@ impl StrainLimiter {
             *f = source(v);
         }
         self.depth.fill(UNREACHED);
-        let mut queue: Vec<u32> = (0..n as u32)
-            .filter(|&v| self.sources[v as usize])
-            .collect();
-        for &v in &queue {
+        let queue = &mut self.queue;
+        queue.clear();
+        queue.extend((0..n as u32).filter(|&v| self.sources[v as usize]));
+        for &v in queue.iter() {
             self.depth[v as usize] = 0;
         }
         let mut head = 0;
@@ -120,7 +125,9 @@ impl StrainLimiter {
             let d = depth[a as usize].min(depth[b as usize]);
             if d == UNREACHED { n } else { d as usize }
         };
-        let mut starts = vec![0u32; n + 2];
+        let starts = &mut self.starts;
+        starts.clear();
+        starts.resize(n + 2, 0);
         for e in 0..springs.verts.len() {
             starts[key(e) + 1] += 1;
         }
@@ -220,6 +227,37 @@ impl StrainLimiter {
         }
         corrections
     }
+
+    /// [`Self::limit`] after a collision pass: the vertices `moved` flags count [`MOVED_MASS`]
+    /// times heavier and the first sweep goes outwards from them as from fixed vertices, so
+    /// the cloth around them takes up the strain the pass left, in few sweeps, rather than
+    /// undoing what it did.
+    pub fn limit_around(
+        &mut self,
+        springs: &Springs,
+        limit: f64,
+        m: &mut Substep,
+        floors: &[Floor],
+        moved: &[bool],
+    ) -> u32 {
+        let mut weights = std::mem::take(&mut self.weights);
+        weights.clear();
+        weights.extend(
+            m.inverse_mass
+                .iter()
+                .zip(moved)
+                .map(|(&w, &moved)| if moved { w / MOVED_MASS } else { w }),
+        );
+        let corrections = self.sweep(
+            springs,
+            limit,
+            &mut m.weighted(&weights),
+            floors,
+            Some(moved),
+        );
+        self.weights = weights;
+        corrections
+    }
 }
 
 /// A half-space a vertex's corrections must not leave: n · x ≥ offset for a unit normal n
@@ -252,39 +290,6 @@ impl Floor {
         } else {
             delta
         }
-    }
-}
-
-impl StrainLimiter {
-    /// [`Self::limit`] after a collision pass: the vertices `moved` flags count [`MOVED_MASS`]
-    /// times heavier and the first sweep goes outwards from them as from fixed vertices, so
-    /// the cloth around them takes up the strain the pass left, in few sweeps, rather than
-    /// undoing what it did.
-    pub fn limit_around(
-        &mut self,
-        springs: &Springs,
-        limit: f64,
-        m: &mut Substep,
-        floors: &[Floor],
-        moved: &[bool],
-    ) -> u32 {
-        let mut weights = std::mem::take(&mut self.weights);
-        weights.clear();
-        weights.extend(
-            m.inverse_mass
-                .iter()
-                .zip(moved)
-                .map(|(&w, &moved)| if moved { w / MOVED_MASS } else { w }),
-        );
-        let corrections = self.sweep(
-            springs,
-            limit,
-            &mut m.weighted(&weights),
-            floors,
-            Some(moved),
-        );
-        self.weights = weights;
-        corrections
     }
 }
 

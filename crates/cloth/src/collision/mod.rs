@@ -84,8 +84,8 @@ pub(crate) struct Collisions {
     held: Vec<f64>,
     /// The self-collision queries' answers, reused.
     layers: self_collision::Buffers,
-    /// The vertices the last repulsion (or body push) moved.
-    repelled: Vec<bool>,
+    /// The vertices the last repulsion or body push moved.
+    moved: Vec<bool>,
     /// End positions before the body passes.
     before: Vec<Point>,
 }
@@ -161,7 +161,7 @@ impl Collisions {
             pulling: vec![false; n],
             held: Vec::with_capacity(n),
             layers: self_collision::Buffers::default(),
-            repelled: vec![false; n],
+            moved: vec![false; n],
             before: Vec::with_capacity(n),
         })
     }
@@ -251,7 +251,7 @@ impl Collisions {
         settings: &Settings,
         motion: &mut Motion,
     ) -> Result<&[bool], CollideError> {
-        self.repelled.resize(motion.x.len(), false);
+        self.moved.resize(motion.x.len(), false);
         if settings.self_collision {
             self.hold(motion.inverse_mass);
             let mut layers = motion.weighted(&self.held);
@@ -260,12 +260,12 @@ impl Collisions {
                 settings.thickness,
                 &mut layers,
                 &mut self.layers,
-                &mut self.repelled,
+                &mut self.moved,
             )?;
         } else {
-            self.repelled.fill(false);
+            self.moved.fill(false);
         }
-        Ok(&self.repelled)
+        Ok(&self.moved)
     }
 
     /// The passes after repulsion (steps 4–6 of the module docs) on the end positions and
@@ -299,10 +299,10 @@ impl Collisions {
             if pushed > 0 {
                 // The pushes strain the edges around the pushed vertices: relax around them,
                 // then push out whatever that brought back within half the thickness.
-                self.repelled.clear();
-                self.repelled
+                self.moved.clear();
+                self.moved
                     .extend(self.before.iter().zip(motion.x.iter()).map(|(a, b)| a != b));
-                relax(motion, &self.repelled);
+                relax(motion, &self.moved);
                 resolved += obstacle.project(thickness, motion)?;
             }
             resolved += pushed;

@@ -165,12 +165,7 @@ impl Obstacle {
             let body = self.velocity_at(c);
             let closing = (v0[i] + settings.gravity * h - body).dot(&normal);
             if distance + h * closing < thickness {
-                let approach = (distance - thickness).max(0.0) / h;
-                out.push(Contact {
-                    vertex: i as u32,
-                    normal,
-                    velocity: body - normal * approach,
-                });
+                out.push(contact(i, normal, distance, body, thickness, h));
             }
         }
         Ok(())
@@ -198,12 +193,7 @@ impl Obstacle {
             let (normal, distance) = away_from(x0[i], c);
             let body = self.velocity_at(c);
             if (x[i] - c.point - body * h).dot(&normal) < 0.5 * thickness {
-                let approach = (distance - thickness).max(0.0) / h;
-                out.push(Contact {
-                    vertex: i as u32,
-                    normal,
-                    velocity: body - normal * approach,
-                });
+                out.push(contact(i, normal, distance, body, thickness, h));
             }
         }
         out.len() - before
@@ -327,6 +317,18 @@ impl Obstacle {
 
 /// The unit direction away from the body at the closest point `c` to `q`, and the signed
 /// distance along it (negative behind the face, i.e. inside the body).
+/// The contact of vertex `i`, `distance` from the body along `normal` at the start of a
+/// substep of length `h`, the body point moving at `body`: its normal velocity follows the
+/// body's, plus the approach that ends it at the thickness when it is farther.
+fn contact(i: usize, normal: Vec3, distance: f64, body: Vec3, thickness: f64, h: f64) -> Contact {
+    let approach = (distance - thickness).max(0.0) / h;
+    Contact {
+        vertex: i as u32,
+        normal,
+        velocity: body - normal * approach,
+    }
+}
+
 pub(super) fn away_from(q: Point, c: &Closest) -> (Vec3, f64) {
     let offset = q - c.point;
     if offset.dot(&c.normal) > 0.0 && c.distance > 0.0 {
