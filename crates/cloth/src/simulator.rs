@@ -529,7 +529,7 @@ impl Simulator {
             for (i, d) in w.delta.iter_mut().enumerate() {
                 *d = f.s[i] * *d + (Mat3::identity() - f.s[i]) * (f.z[i] - w.v[i]);
             }
-            self.solve(report)?;
+            self.solve(report, true)?;
         }
         Ok(())
     }
@@ -547,9 +547,11 @@ impl Simulator {
         );
     }
 
-    /// Solves the filtered system for `work.delta`, from its value.
-    fn solve(&mut self, report: &mut StepReport) -> Result<(), StepFailure> {
+    /// Solves the filtered system for `work.delta`, from its value; `again` when the matrix
+    /// is the last solve's, with more contacts.
+    fn solve(&mut self, report: &mut StepReport, again: bool) -> Result<(), StepFailure> {
         let w = &mut self.work;
+        self.pcg.prepare(&self.assembly.matrix, &w.filter.s, again);
         let solve = self.pcg.solve(
             &self.assembly.matrix,
             &w.filter.s,
@@ -596,7 +598,7 @@ impl Simulator {
                 };
             }
             report.newton_iterations += 1;
-            self.solve(report)?;
+            self.solve(report, false)?;
             self.add_missed_contacts(t1, h, report)?;
             let w = &self.work;
             let slope: f64 = w.rhs.iter().zip(&w.delta).map(|(r, d)| r.dot(d)).sum();

@@ -5,11 +5,14 @@
 //! (Graphics Interface 1995): woven cloth barely stretches, but springs stiff enough to show
 //! that make the system stiff and the steps small. Instead the springs keep a workable
 //! stiffness and, after each step, every edge whose length is past its critical deformation
-//! (10% in the paper) is brought back to it by moving its two ends along the edge, shared in
+//! (10% in the paper) is brought back within it by moving its two ends along the edge, shared in
 //! inverse proportion to their masses; an end whose position is prescribed (a pin, an
 //! attachment) does not move, so the other end takes the whole correction. Provot corrects
 //! stretched edges; edges squashed past the same fraction are lengthened here too, since
-//! cloth buckles out of plane rather than compressing in it.
+//! cloth buckles out of plane rather than compressing in it. An edge is brought [`SLACK`] of
+//! the limit inside it rather than exactly to it, so that its neighbours' corrections do
+//! not push it straight back out: brought exactly to the limit, the 64² drape's edges never
+//! all settled and every substep ran all the sweeps; with the slack most end in under ten.
 //!
 //! The edges are visited in a fixed order (Gauss–Seidel, see [`StrainLimiter::limit`]),
 //! sweep after sweep until none is past the limit or [`SWEEPS`] is reached; the result does
@@ -27,8 +30,13 @@ use crate::collision::Motion as Substep;
 use crate::energy::Vec3;
 use crate::model::Springs;
 
-/// Most Gauss–Seidel sweeps over the edges per substep.
-pub const SWEEPS: usize = 64;
+/// Most Gauss–Seidel sweeps over the edges per substep (the impact of the 128² drape on the
+/// sphere takes about 120; 64 left it 12% strained).
+pub const SWEEPS: usize = 256;
+
+/// An edge past the limit is brought this fraction of the limit inside it, so that the
+/// corrections of its neighbours do not push it straight back out.
+const SLACK: f64 = 0.05;
 
 /// How much heavier a vertex a collision pass moved is in [`StrainLimiter::limit_around`].
 const MOVED_MASS: f64 = 100.0;
@@ -206,10 +214,12 @@ impl StrainLimiter {
                 }
                 let d = x[b] - x[a];
                 let length = d.norm();
-                let goal = length.clamp((1.0 - limit) * rest, (1.0 + limit) * rest);
-                if goal == length || length == 0.0 {
+                let (short, long) = ((1.0 - limit) * rest, (1.0 + limit) * rest);
+                if (short..=long).contains(&length) || length == 0.0 {
                     continue;
                 }
+                let inner = limit * (1.0 - SLACK);
+                let goal = length.clamp((1.0 - inner) * rest, (1.0 + inner) * rest);
                 // Moving a by +s·wa·d and b by −s·wb·d changes the length by −s (wa + wb) length.
                 let s = (length - goal) / (length * (wa + wb));
                 let da = floors[a].clamp(x[a], d * (s * wa));
@@ -350,11 +360,12 @@ mod tests {
         let (n, v) = limit(&springs, &[1.0, 3.0], &mut x);
         let h = 0.01;
         assert_eq!(n, 1);
-        assert!(((x[1] - x[0]).norm() - 1.1).abs() < 1e-12);
-        // 0.4 of shortening, a quarter at the heavy end, three quarters at the light one.
-        assert!((x[0].x - 0.1).abs() < 1e-12);
-        assert!((x[1].x - 1.2).abs() < 1e-12);
-        assert!((v[0].x - 0.1 / h).abs() < 1e-9 && (v[1].x + 0.3 / h).abs() < 1e-9);
+        // Past 10%, so brought to 9.5% (SLACK inside the limit): 0.405 of shortening, a
+        // quarter at the heavy end, three quarters at the light one.
+        assert!(((x[1] - x[0]).norm() - 1.095).abs() < 1e-12);
+        assert!((x[0].x - 0.10125).abs() < 1e-12);
+        assert!((x[1].x - 1.19625).abs() < 1e-12);
+        assert!((v[0].x - 0.10125 / h).abs() < 1e-9 && (v[1].x + 0.30375 / h).abs() < 1e-9);
     }
 
     #[test]
@@ -362,13 +373,14 @@ mod tests {
         let (springs, mut x) = chain(&[0.5]);
         limit(&springs, &[0.0, 1.0], &mut x);
         assert_eq!(x[0], Point::origin());
-        assert!((x[1].x - 0.9).abs() < 1e-12);
+        assert!((x[1].x - 0.905).abs() < 1e-12);
     }
 
     #[test]
     fn a_vertex_near_the_body_stops_at_its_floor() {
-        // Squashed to half: lengthening moves b 0.2 along +x, towards the body behind its
-        // floor x ≤ 0.6 (normal −x); b stops there, a takes the rest of the correction.
+        // Squashed to half: lengthening to 0.905 would move b 0.2025 along +x, towards the
+        // body behind its floor x ≤ 0.6 (normal −x); b stops there, a moves its share, and
+        // later sweeps move a alone until the edge is within the limit.
         let (springs, mut x) = chain(&[0.5]);
         let floor = Floor {
             normal: -Vec3::x(),
@@ -376,7 +388,8 @@ mod tests {
         };
         let (_, v) = run(&springs, &[1.0, 1.0], &mut x, &[Floor::NONE, floor], &[]);
         assert!((x[1].x - 0.6).abs() < 1e-12, "{x:?}");
-        assert!(((x[1] - x[0]).norm() - 0.9).abs() < 1e-12, "{x:?}");
+        let length = (x[1] - x[0]).norm();
+        assert!((0.9..=0.905).contains(&length), "{x:?}");
         assert!(x[0].x < 0.0 && v[0].x < 0.0 && v[1].x > 0.0);
     }
 
@@ -388,7 +401,7 @@ mod tests {
         run(&springs, &[1.0; 3], &mut x, &[], &[true, false, false]);
         assert_eq!(x[0], Point::origin());
         assert!(
-            (x[1].x - 1.1).abs() < 1e-12 && (x[2].x - 2.2).abs() < 1e-12,
+            (x[1].x - 1.095).abs() < 1e-12 && (x[2].x - 2.19).abs() < 1e-12,
             "{x:?}"
         );
         // Without the pass the same chain shares the correction from both ends.
