@@ -87,10 +87,10 @@ struct Level {
 #[derive(Clone, Debug)]
 pub(crate) struct Multigrid {
     levels: Vec<Level>,
-    /// Fine level: whether each particle's filter is the identity, and ω S D⁻¹ for the
-    /// filter S and the filtered diagonal blocks D.
+    /// Fine level: whether each particle's filter is the identity and the inverses of the
+    /// filtered diagonal blocks.
     free: Vec<bool>,
-    smoother: Vec<Mat3>,
+    inverse_diagonal: Vec<Mat3>,
     /// Dense Cholesky factor of the coarsest level, when it is small and positive definite.
     coarsest: Option<Cholesky<f64, Dyn>>,
     /// Whether `levels` have been built (at the first update).
@@ -180,27 +180,21 @@ impl Level {
         let sources = &self.sources;
         self.matrix
             .fill(|slot, _, _| sources.row(slot).iter().map(|&s| above(s as usize)).sum());
-        invert_diagonal(
-            &self.matrix,
-            &mut self.inverse_diagonal,
-            |_, d| d,
-            |_, inverse| inverse,
-        );
+        invert_diagonal(&self.matrix, &mut self.inverse_diagonal, |_, d| d);
     }
 }
 
-/// `then(i, inverse)` of the inverse of `filtered(i, block)` for each diagonal block of `a`
-/// (the identity where it is singular).
+/// The inverse of `filtered(i, block)` for each diagonal block of `a`, or the identity where it
+/// is singular.
 fn invert_diagonal(
     a: &BlockMatrix,
     out: &mut [Mat3],
     filtered: impl Fn(usize, Mat3) -> Mat3 + Sync,
-    then: impl Fn(usize, Mat3) -> Mat3 + Sync,
 ) {
     out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
         for (i, d) in (c * CHUNK..).zip(out) {
             let block = filtered(i, a.block(i as u32, i as u32));
-            *d = then(i, block.try_inverse().unwrap_or_else(Mat3::identity));
+            *d = block.try_inverse().unwrap_or_else(Mat3::identity);
         }
     });
 }
@@ -266,7 +260,7 @@ impl Multigrid {
             levels: Vec::new(),
             built: false,
             free: vec![true; n],
-            smoother: vec![Mat3::identity(); n],
+            inverse_diagonal: vec![Mat3::identity(); n],
             coarsest: None,
         }
     }
@@ -314,12 +308,7 @@ impl Multigrid {
                 filter[i] * block * filter[j]
             }
         };
-        invert_diagonal(
-            a,
-            &mut self.smoother,
-            |i, d| filtered(i, i, d),
-            |i, inverse| filter[i] * inverse * OMEGA,
-        );
+        invert_diagonal(a, &mut self.inverse_diagonal, |i, d| filtered(i, i, d));
         if !coarse {
             return;
         }
@@ -352,10 +341,9 @@ impl Multigrid {
     }
 
     /// The fine level's part of the preconditioner at particle `i` of the residual `r`:
-    /// ω S_i D_i⁻¹ r_i, for the filter S given to the last [`Self::update`].
-    #[inline]
-    pub fn smooth(&self, i: usize, r: Vec3) -> Vec3 {
-        self.smoother[i] * r
+    /// ω S_i D_i⁻¹ r_i, for the `filter` S given to the last [`Self::update`].
+    pub fn smooth(&self, filter: &[Mat3], i: usize, r: Vec3) -> Vec3 {
+        filter[i] * (self.inverse_diagonal[i] * r) * OMEGA
     }
 
     /// The coarse levels' part of the preconditioner on the fine residual `r` (filtered):
@@ -375,7 +363,6 @@ impl Multigrid {
 
     /// The coarse correction of the last [`Self::coarse_cycle`] at fine particle `i`,
     /// unfiltered: its aggregate's (zero without coarse levels).
-    #[inline]
     pub fn correction(&self, i: usize) -> Vec3 {
         self.levels
             .first()
@@ -509,9 +496,9 @@ mod tests {
         let mut apply = |r: &[Vec3]| -> (Vec<Vec3>, f64) {
             let coarse = mg.coarse_cycle(r);
             let z: Vec<Vec3> = (0..n)
-                .map(|i| mg.smooth(i, r[i]) + filter[i] * mg.correction(i))
+                .map(|i| mg.smooth(&filter, i, r[i]) + filter[i] * mg.correction(i))
                 .collect();
-            let fine: f64 = (0..n).map(|i| r[i].dot(&mg.smooth(i, r[i]))).sum();
+            let fine: f64 = (0..n).map(|i| r[i].dot(&mg.smooth(&filter, i, r[i]))).sum();
             (z, fine + coarse)
         };
         let filtered =

@@ -120,7 +120,7 @@ impl Pcg {
             for (i, (r, z)) in (base..).zip(r.iter_mut().zip(z)) {
                 let sb = filter[i] * b[i];
                 *r = filter[i] * (b[i] - q_start[i]);
-                *z = mg.smooth(i, *r);
+                *z = mg.smooth(filter, i, *r);
                 sums[0] += sb.dot(&sb);
                 sums[1] += r.dot(z);
             }
@@ -181,7 +181,7 @@ impl Pcg {
                 for (i, ((x, r), z)) in (base..).zip(x.iter_mut().zip(r).zip(z)) {
                     *x += p_now[i] * alpha;
                     *r -= q_now[i] * alpha;
-                    *z = mg.smooth(i, *r);
+                    *z = mg.smooth(filter, i, *r);
                     sums[0] += r.dot(r);
                     sums[1] += r.dot(z);
                 }
