@@ -25,8 +25,11 @@ use super::Motion;
 use super::obstacle::away_from;
 use crate::energy::Vec3;
 
-/// Rounds of measure-and-lift per substep.
-const ROUNDS: usize = 8;
+/// Most rounds of measure-and-lift per substep; the pass stops at the first round that finds
+/// nothing to lift. Overlapping requests settle geometrically (each round lifts a control
+/// point by the mean of its requests): 8 rounds left the 13² drape's surface 0.03 mm inside
+/// the thickness under a 1% change of the CG tolerance.
+const ROUNDS: usize = 32;
 
 /// How far past the thickness a lifted refined point is aimed, relative to it, so that the
 /// distance measured afterwards is not below the thickness by rounding.
