@@ -125,34 +125,24 @@ pub(crate) struct Assembly {
 /// The gather triples of `N`-point elements of `K` difference vectors with coefficients
 /// `coef(e)`, whose gradients start at slot `grad_base` and Hessians at `hess_base`: (particle,
 /// gradient slot, −c_ka) for the forces, ((row, column), Hessian slot, c_ka c_lb) for the blocks.
-/// With `lumped` points (a, b), the blocks between those two points go to their diagonals
-/// instead: |c_ka c_lb| on each (see [`Assembly::new`]).
 fn sources<const N: usize, const K: usize>(
     verts: &[[u32; N]],
     coef: impl Fn(usize) -> [[f64; N]; K],
     (grad_base, hess_base): (usize, usize),
-    lumped: Option<(usize, usize)>,
     force_triples: &mut Vec<(u32, u32, f64)>,
     block_triples: &mut Vec<((u32, u32), u32, f64)>,
 ) {
     for (e, vs) in verts.iter().enumerate() {
         let c = coef(e);
         for (k, c_k) in c.iter().enumerate() {
-            for (a, (&va, &ca)) in vs.iter().zip(c_k).enumerate() {
+            for (&va, &ca) in vs.iter().zip(c_k) {
                 if ca != 0.0 {
                     force_triples.push((va, (grad_base + e * K + k) as u32, -ca));
                 }
                 for (l, c_l) in c.iter().enumerate() {
-                    for (b, (&vb, &cb)) in vs.iter().zip(c_l).enumerate() {
-                        if ca * cb == 0.0 {
-                            continue;
-                        }
-                        let slot = (hess_base + (e * K + k) * K + l) as u32;
-                        if lumped == Some((a, b)) {
-                            let w = (ca * cb).abs();
-                            block_triples.push(((va, va), slot, w));
-                            block_triples.push(((vb, vb), slot, w));
-                        } else if lumped != Some((b, a)) {
+                    for (&vb, &cb) in vs.iter().zip(c_l) {
+                        if ca * cb != 0.0 {
+                            let slot = (hess_base + (e * K + k) * K + l) as u32;
                             block_triples.push(((va, vb), slot, ca * cb));
                         }
                     }
@@ -204,15 +194,8 @@ const SPRING: [[f64; 2]; 1] = [[1.0, -1.0]];
 const DIAGONALS: [[f64; 4]; 2] = [[1.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, -1.0]];
 
 impl Assembly {
-    /// The pattern and gather tables of `model`. With `lump_bend`, a bend triple's blocks
-    /// between its two ends (two edges apart) go to their diagonal blocks: its point Hessian
-    /// c cᵀ ⊗ H (H the d-space Hessian, PSD once projected) becomes C' ⊗ H with
-    /// C' = c cᵀ + |c₁c₃| (e₁ − σ e₃)(e₁ − σ e₃)ᵀ (σ the sign of c₁c₃), which drops the
-    /// (1, 3) entries and is PSD and above the exact one. The matrix then couples a particle
-    /// only to those it shares a face with: 9 blocks a row of a quad grid instead of 13, so
-    /// every product and coarse gather reads 30% less, for a Jacobian that is exact but for
-    /// the weakest term's longest reach. The forces stay exact.
-    pub fn new(model: &Model, lump_bend: bool) -> Self {
+    /// The pattern and gather tables of `model`.
+    pub fn new(model: &Model) -> Self {
         let n = model.vertex_count();
         let (s, q, t) = (&model.springs, &model.quads, &model.triples);
         let (gs, gq) = (s.verts.len(), 2 * q.verts.len());
@@ -220,10 +203,9 @@ impl Assembly {
         let mut force_triples = Vec::new();
         let mut block_triples = Vec::new();
         let (f, b) = (&mut force_triples, &mut block_triples);
-        sources(&s.verts, |_| SPRING, (0, 0), None, f, b);
-        sources(&q.verts, |_| DIAGONALS, (gs, hs), None, f, b);
-        let ends = lump_bend.then_some((0, 2));
-        sources(&t.verts, |e| [t.coef[e]], (gs + gq, hs + hq), ends, f, b);
+        sources(&s.verts, |_| SPRING, (0, 0), f, b);
+        sources(&q.verts, |_| DIAGONALS, (gs, hs), f, b);
+        sources(&t.verts, |e| [t.coef[e]], (gs + gq, hs + hq), f, b);
         let matrix = BlockMatrix::from_pairs(n, block_triples.iter().map(|&(pair, _, _)| pair));
         let slot_triples = block_triples
             .iter()
@@ -404,7 +386,7 @@ mod tests {
         let x_damp = jitter(&mut rng, 0.1);
         let v = (0..model.vertex_count()).map(|_| rng.vec3()).collect();
         Setup {
-            assembly: Assembly::new(&model, false),
+            assembly: Assembly::new(&model),
             model,
             x,
             x_damp,
@@ -563,33 +545,21 @@ mod tests {
         let (x, v) = (s.x.clone(), s.v.clone());
         s.assembly
             .evaluate(&s.model, &x, &s.x_damp, &v, &s.env, Some(c), true);
-        // The same with the bend triples' end blocks lumped on the diagonal.
-        let mut lumped = Assembly::new(&s.model, true);
-        lumped.evaluate(&s.model, &x, &s.x_damp, &v, &s.env, Some(c), true);
-        assert_eq!(lumped.force, s.assembly.force);
-        let (exact, lumped) = (&s.assembly.matrix, &lumped.matrix);
-        assert!(lumped.blocks().len() < exact.blocks().len());
-        let quadratic = |a: &BlockMatrix, y: &[Vec3]| -> f64 {
-            let mut ay = vec![Vec3::zeros(); y.len()];
-            a.mul_into(y, &mut ay);
-            y.iter().zip(&ay).map(|(a, b)| a.dot(b)).sum()
-        };
-        for a in [exact, lumped] {
-            for (slot, (i, j)) in a.entries().enumerate() {
-                assert_eq!(a.blocks()[slot], a.block(j, i).transpose());
-            }
+        let a = &s.assembly.matrix;
+        for (slot, (i, j)) in a.entries().enumerate() {
+            assert_eq!(a.blocks()[slot], a.block(j, i).transpose());
         }
         for _ in 0..20 {
             let y: Vec<Vec3> = (0..x.len()).map(|_| rng.vec3()).collect();
+            let mut ay = vec![Vec3::zeros(); x.len()];
+            a.mul_into(&y, &mut ay);
+            let quad: f64 = y.iter().zip(&ay).map(|(a, b)| a.dot(b)).sum();
             let mass: f64 = y
                 .iter()
                 .zip(&s.model.mass)
                 .map(|(y, m)| m * y.norm_squared())
                 .sum();
-            let (e, l) = (quadratic(exact, &y), quadratic(lumped, &y));
-            assert!(e >= mass * (1.0 - 1e-9), "yᵀAy = {e} < yᵀMy = {mass}");
-            // Lumping adds a PSD term: yᵀA'y ≥ yᵀAy.
-            assert!(l >= e * (1.0 - 1e-12), "lumped yᵀA'y = {l} < yᵀAy = {e}");
+            assert!(quad >= mass * (1.0 - 1e-9), "yᵀAy = {quad} < yᵀMy = {mass}");
         }
     }
 }

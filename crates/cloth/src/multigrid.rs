@@ -12,9 +12,8 @@
 //!   order, a particle whose strongly coupled neighbours are all unassigned forms an aggregate
 //!   with them; each particle left over joins the aggregate of its first assigned strong
 //!   neighbour. Strength is read off the first matrix solved (built at the first update), so
-//!   weak couplings (the bending springs' across two edges, where the matrix keeps them:
-//!   the simulator lumps them on the diagonal, see `Assembly::new`) do not make aggregates
-//!   too large for the piecewise-constant prolongation. Each aggregate is a node of the next level,
+//!   the bending springs' weak couplings across two edges do not make aggregates too large
+//!   for the piecewise-constant prolongation. Each aggregate is a node of the next level,
 //!   which is coarsened the same way until a level has at most [`COARSEST`] nodes.
 //! - **Coarse matrices**, per solve: with the piecewise-constant prolongation P (a coarse node's
 //!   3-vector copied to every particle of its aggregate), the Galerkin product Pᵀ A P is the sum
@@ -46,10 +45,9 @@ use crate::energy::{Mat3, Vec3};
 use crate::matrix::{BlockMatrix, csr_from_sorted};
 use crate::reduce::CHUNK;
 
-/// Relative size of a coupling that [`aggregate`] follows (the 64² drape in contact, with the
-/// bending springs' weak reach across two edges in the matrix: 0 takes every stored pair,
-/// aggregates of 14 particles and 48 CG iterations per substep; 0.1 leaves that reach out,
-/// aggregates of 6 and 44 iterations).
+/// Relative size of a coupling that [`aggregate`] follows (the 64² drape in contact: 0 takes
+/// every stored pair, aggregates of 14 particles and 48 CG iterations per substep; 0.1 leaves
+/// out the bending springs' weak reach across two edges, aggregates of 6 and 44 iterations).
 const STRENGTH: f64 = 0.1;
 
 /// Weight of each damped block-Jacobi sweep.

@@ -216,7 +216,7 @@ impl Simulator {
             }
         }
         let n = model.vertex_count();
-        let assembly = Assembly::new(&model, settings.project_hessians);
+        let assembly = Assembly::new(&model);
         Ok(Self {
             collisions: Collisions::new(&model)?,
             strain_limiter: StrainLimiter::new(&model.springs, n),
