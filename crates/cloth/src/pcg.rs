@@ -115,7 +115,7 @@ impl Pcg {
         a.mul_into(x, q);
         let (q_start, mg) = (&*q, &*multigrid);
         let chunks = r.par_chunks_mut(CHUNK).zip(z.par_chunks_mut(CHUNK));
-        let [bb, rz_fine] = chunked(chunks, partials, |base, (r, z)| {
+        let [bb, mut rz_fine] = chunked(chunks, partials, |base, (r, z)| {
             let mut sums = [0.0; 2];
             for (i, (r, z)) in (base..).zip(r.iter_mut().zip(z)) {
                 let sb = filter[i] * b[i];
@@ -130,7 +130,8 @@ impl Pcg {
         let mut residual = dot(r, r, partials);
         let mut rz = 0.0;
         let mut beta = 0.0;
-        let mut rz_fine = rz_fine;
+        // The first direction is z itself (β = 0); p is cleared so that nothing a failed
+        // solve left in it can leak in.
         p.fill(Vec3::zeros());
         let mut iterations = 0;
         loop {

@@ -193,6 +193,7 @@ impl StrainLimiter {
             self.order_from(springs, |v| inverse_mass[v] == 0.0);
         }
         let edges = self.order.len();
+        let inner = limit * (1.0 - SLACK);
         let mut corrections = 0;
         for sweep in 0..SWEEPS {
             let mut changed = false;
@@ -218,7 +219,6 @@ impl StrainLimiter {
                 if (short..=long).contains(&length) || length == 0.0 {
                     continue;
                 }
-                let inner = limit * (1.0 - SLACK);
                 let goal = length.clamp((1.0 - inner) * rest, (1.0 + inner) * rest);
                 // Moving a by +s·wa·d and b by −s·wb·d changes the length by −s (wa + wb) length.
                 let s = (length - goal) / (length * (wa + wb));

@@ -280,7 +280,7 @@ impl Collisions {
         Ok(&self.moved)
     }
 
-    /// The passes after repulsion (steps 4–6 of the module docs) on the end positions and
+    /// The passes after repulsion (steps 4–7 of the module docs) on the end positions and
     /// velocities, `relax` after each round of self impulses (see
     /// [`self_collision::resolve_impacts`]). Returns how many impacts and projections they
     /// made.
@@ -293,15 +293,7 @@ impl Collisions {
         let thickness = settings.thickness;
         let mut resolved = 0;
         if settings.self_collision {
-            self.hold(motion.inverse_mass);
-            let mut layers = motion.weighted(&self.held);
-            resolved += self_collision::resolve_impacts(
-                &mut self.cloth,
-                thickness,
-                &mut layers,
-                &mut self.layers,
-                relax,
-            )?;
+            resolved += self.layer_impacts(thickness, motion, relax, false)?;
         }
         if let Some(obstacle) = &mut self.obstacle {
             self.before.clear();
@@ -331,6 +323,33 @@ impl Collisions {
         Ok(resolved)
     }
 
+    /// The continuous self impacts (step 4), with the body's contact vertices [`HELD_MASS`]
+    /// times heavier, and with `pushed_heavier` the vertices the body passes pushed too.
+    fn layer_impacts(
+        &mut self,
+        thickness: f64,
+        motion: &mut Motion,
+        relax: &mut impl FnMut(&mut Motion, &[bool]),
+        pushed_heavier: bool,
+    ) -> Result<u32, CollideError> {
+        self.hold(motion.inverse_mass);
+        if pushed_heavier {
+            for (held, &pushed) in self.held.iter_mut().zip(&self.moved) {
+                if pushed {
+                    *held /= HELD_MASS;
+                }
+            }
+        }
+        let mut layers = motion.weighted(&self.held);
+        self_collision::resolve_impacts(
+            &mut self.cloth,
+            thickness,
+            &mut layers,
+            &mut self.layers,
+            relax,
+        )
+    }
+
     /// The self impacts again after the body passes: a push can fold a layer lying on the
     /// body through the one above it. The self pass changes velocities and puts positions
     /// at x₀ + h v, so for it each vertex takes the velocity that reaches the position the
@@ -350,20 +369,7 @@ impl Collisions {
         }
         self.reaching.clear();
         self.reaching.extend_from_slice(motion.v);
-        self.hold(motion.inverse_mass);
-        for (held, &pushed) in self.held.iter_mut().zip(&self.moved) {
-            if pushed {
-                *held /= HELD_MASS;
-            }
-        }
-        let mut layers = motion.weighted(&self.held);
-        let resolved = self_collision::resolve_impacts(
-            &mut self.cloth,
-            thickness,
-            &mut layers,
-            &mut self.layers,
-            relax,
-        )?;
+        let resolved = self.layer_impacts(thickness, motion, relax, true)?;
         for ((v, own), reaching) in motion
             .v
             .iter_mut()
