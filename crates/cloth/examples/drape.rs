@@ -2,7 +2,9 @@
 //! onto a sphere of radius 0.5 m, 60 frames at 24 fps (the default substeps, or `--substeps`
 //! a frame). Prints per frame the time, the solver's work (Newton and CG iterations), the
 //! contacts, the fail-safe's impacts and the worst edge strain, then the totals: the figures
-//! behind the `step` benchmark.
+//! behind the `step` benchmark, and a digest of the final positions' bits (FNV-1a), so a
+//! change meant to keep the numbers (a faster product, another thread count) can show that it
+//! kept them to the last bit.
 //!
 //! `cargo run --release -p tailor-cloth --example drape -- [N] [--self] [--frames F] [--substeps S]`
 
@@ -65,5 +67,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         total_cg as f64 / f64::from(frames),
         100.0 * worst_strain
     );
+    let digest = state
+        .positions
+        .iter()
+        .flat_map(|p| p.coords.iter())
+        .flat_map(|c| c.to_bits().to_le_bytes())
+        .fold(0xcbf2_9ce4_8422_2325_u64, |h, byte| {
+            (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3)
+        });
+    println!("final positions digest {digest:016x}");
     Ok(())
 }

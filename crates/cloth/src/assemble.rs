@@ -110,7 +110,7 @@ impl Gather {
 pub(crate) struct Assembly {
     pub matrix: BlockMatrix,
     pub force: Vec<Vec3>,
-    /// Per matrix slot, and per particle: the d-space slots that sum to it.
+    /// Per stored matrix block, and per particle: the d-space slots that sum to it.
     blocks: Gather,
     forces: Gather,
     /// d-space gradients and Hessians of every element, springs then quads then triples.
@@ -206,17 +206,21 @@ impl Assembly {
         sources(&s.verts, |_| SPRING, (0, 0), f, b);
         sources(&q.verts, |_| DIAGONALS, (gs, hs), f, b);
         sources(&t.verts, |e| [t.coef[e]], (gs + gq, hs + hq), f, b);
-        let matrix = BlockMatrix::from_pairs(n, block_triples.iter().map(|&(pair, _, _)| pair));
+        let matrix = BlockMatrix::symmetric(n, block_triples.iter().map(|&(pair, _, _)| pair));
+        // Only the blocks on and above the diagonal are summed: each below is the transpose
+        // of its mirror, the same terms transposed (every element's d-space Hessian is
+        // symmetric).
         let slot_triples = block_triples
             .iter()
-            .map(|&((a, b), local, w)| {
+            .filter_map(|&((a, b), local, w)| {
                 let slot = matrix.slot(a, b).expect("element pair in pattern");
-                (slot as u32, local, w)
+                let value = matrix.value_index(slot)?;
+                Some((value as u32, local, w))
             })
             .collect();
         let elements = s.verts.len() + q.verts.len() + t.verts.len();
         Self {
-            blocks: Gather::new(matrix.blocks().len(), slot_triples),
+            blocks: Gather::new(matrix.values().len(), slot_triples),
             forces: Gather::new(n, force_triples),
             local_grad: vec![Vec3::zeros(); gs + gq + t.verts.len()],
             local_hess: vec![Mat3::zeros(); hs + hq + t.verts.len()],
@@ -332,8 +336,8 @@ impl Assembly {
         });
         if let Some(c) = c {
             let blocks = &self.blocks;
-            self.matrix.fill(|slot, row, col| {
-                let mut sum = blocks.sum(slot, local_hess);
+            self.matrix.fill(|value, row, col| {
+                let mut sum = blocks.sum(value, local_hess);
                 if row == col {
                     let i = row as usize;
                     sum += Mat3::identity()
@@ -545,10 +549,20 @@ mod tests {
         let (x, v) = (s.x.clone(), s.v.clone());
         s.assembly
             .evaluate(&s.model, &x, &s.x_damp, &v, &s.env, Some(c), true);
-        let a = &s.assembly.matrix;
-        for (slot, (i, j)) in a.entries().enumerate() {
-            assert_eq!(a.blocks()[slot], a.block(j, i).transpose());
+        // The matrix stores the blocks on and above the diagonal, standing for their mirrors
+        // transposed: right when every element's d-space Hessian is symmetric, to the bit.
+        let (springs, quads) = (s.model.springs.verts.len(), s.model.quads.verts.len());
+        let hess = &s.assembly.local_hess;
+        for (k, h) in hess.iter().enumerate() {
+            let quad_slot = (k >= springs && k < springs + 4 * quads).then(|| (k - springs) % 4);
+            let mirror = match quad_slot {
+                Some(1) => hess[k + 1],
+                Some(2) => hess[k - 1],
+                _ => *h,
+            };
+            assert_eq!(*h, mirror.transpose(), "d-space Hessian slot {k}");
         }
+        let a = &s.assembly.matrix;
         for _ in 0..20 {
             let y: Vec<Vec3> = (0..x.len()).map(|_| rng.vec3()).collect();
             let mut ay = vec![Vec3::zeros(); x.len()];

@@ -1,9 +1,18 @@
-//! A symmetric block-sparse matrix of 3×3 blocks, as Baraff & Witkin 1998 (§5) use for cloth.
+//! Block-sparse matrices of 3×3 blocks, as Baraff & Witkin 1998 (§5) use for cloth.
 //!
 //! Rows are particles; the sparsity pattern (which particles share an element) is fixed by the
-//! topology and built once ([`BlockMatrix::from_pairs`]); only the values change each step.
-//! Both triangles are stored (CSR of blocks, columns sorted), so the product is a parallel
-//! loop over rows with a fixed order inside each row: the same bytes on any thread count.
+//! topology and built once; only the values change each step. The pattern is CSR over *slots*,
+//! every (i, j) position of the matrix, columns sorted in each row. A general matrix
+//! ([`BlockMatrix::from_pairs`]: the multigrid's coarse levels) stores a block per slot. A
+//! symmetric one ([`BlockMatrix::symmetric`]: the implicit system) stores the diagonal and the
+//! blocks above it, and each slot below the diagonal reads the block of its mirror, transposed:
+//! half the bytes, which is what a product with the 128² system is bound by (the blocks of
+//! the rows just above, whose mirrors a row reads, are still in cache), and the same numbers
+//! as storing both triangles, since the assembled matrix is symmetric to the last bit (a
+//! block and its transpose sum the same element terms in the same order).
+//!
+//! The product is a parallel loop over rows with a fixed order inside each row (the slots in
+//! column order): the same bytes on any thread count.
 
 use rayon::prelude::*;
 use tailor_subdiv::topology::Csr;
@@ -11,20 +20,40 @@ use tailor_subdiv::topology::Csr;
 use crate::energy::{Mat3, Vec3};
 use crate::reduce::CHUNK;
 
-/// A square matrix of 3×3 blocks in CSR form.
+/// A square matrix of 3×3 blocks in CSR form, general or symmetric; see the module docs.
 #[derive(Clone, Debug)]
 pub struct BlockMatrix {
     pattern: Csr,
-    /// Row of each stored block.
+    /// Row of each slot.
     rows: Vec<u32>,
-    blocks: Vec<Mat3>,
+    /// Per slot, the index of its block in `values` (below the diagonal of a symmetric matrix:
+    /// of its mirror's, read transposed).
+    value: Vec<u32>,
+    /// Per row, the first slot whose block is its own (the diagonal's, when symmetric), and
+    /// where that row's own blocks start in `values` (one more entry, the end).
+    own: Vec<u32>,
+    value_start: Vec<u32>,
+    /// Per stored block, its slot.
+    slot_of: Vec<u32>,
+    values: Vec<Mat3>,
 }
 
 impl BlockMatrix {
-    /// The pattern holding every diagonal block of `n` rows and both (i, j) and (j, i) for every
-    /// pair given; values zero.
+    /// The general matrix whose pattern holds every diagonal block of `n` rows and both (i, j)
+    /// and (j, i) for every pair given; values zero.
     #[must_use]
     pub fn from_pairs(n: usize, pairs: impl IntoIterator<Item = (u32, u32)>) -> Self {
+        Self::new(n, pairs, false)
+    }
+
+    /// The symmetric matrix of the same pattern as [`Self::from_pairs`], storing the blocks on
+    /// and above the diagonal; values zero.
+    #[must_use]
+    pub fn symmetric(n: usize, pairs: impl IntoIterator<Item = (u32, u32)>) -> Self {
+        Self::new(n, pairs, true)
+    }
+
+    fn new(n: usize, pairs: impl IntoIterator<Item = (u32, u32)>, symmetric: bool) -> Self {
         let mut all: Vec<(u32, u32)> = (0..n as u32).map(|i| (i, i)).collect();
         for (i, j) in pairs {
             all.push((i, j));
@@ -33,11 +62,44 @@ impl BlockMatrix {
         all.sort_unstable();
         all.dedup();
         let pattern = csr_from_sorted(n, &all);
-        let rows = all.iter().map(|&(i, _)| i).collect();
+        let mirrored = |&(i, j): &(u32, u32)| symmetric && j < i;
+        let slot_of: Vec<u32> = (0..all.len() as u32)
+            .filter(|&s| !mirrored(&all[s as usize]))
+            .collect();
+        let mut value = vec![0; all.len()];
+        for (k, &s) in slot_of.iter().enumerate() {
+            value[s as usize] = k as u32;
+        }
+        let find = |i: u32, j: u32| {
+            let range = pattern.range(i as usize);
+            let k = pattern.items[range.clone()].binary_search(&j);
+            (range.start + k.expect("mirror in pattern")) as u32
+        };
+        for (s, pair) in all.iter().enumerate() {
+            if mirrored(pair) {
+                value[s] = value[find(pair.1, pair.0) as usize];
+            }
+        }
+        let own: Vec<u32> = (0..n)
+            .map(|i| {
+                let range = pattern.range(i);
+                let below = pattern.items[range.clone()]
+                    .iter()
+                    .take_while(|&&j| symmetric && (j as usize) < i)
+                    .count();
+                (range.start + below) as u32
+            })
+            .collect();
+        let mut value_start: Vec<u32> = own.iter().map(|&s| value[s as usize]).collect();
+        value_start.push(slot_of.len() as u32);
         Self {
-            blocks: vec![Mat3::zeros(); all.len()],
+            values: vec![Mat3::zeros(); slot_of.len()],
+            rows: all.iter().map(|&(i, _)| i).collect(),
             pattern,
-            rows,
+            value,
+            own,
+            value_start,
+            slot_of,
         }
     }
 
@@ -47,7 +109,13 @@ impl BlockMatrix {
         self.pattern.rows()
     }
 
-    /// The slot of block (i, j) in [`Self::blocks`], if it is in the pattern.
+    /// Number of slots, stored or mirrored.
+    #[must_use]
+    pub fn slots(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// The slot of block (i, j), if it is in the pattern.
     #[must_use]
     pub fn slot(&self, i: u32, j: u32) -> Option<usize> {
         let range = self.pattern.range(i as usize);
@@ -55,10 +123,30 @@ impl BlockMatrix {
         cols.binary_search(&j).ok().map(|k| range.start + k)
     }
 
+    /// The index in [`Self::values`] of the block stored for `slot`, none if it mirrors
+    /// another.
+    #[must_use]
+    pub fn value_index(&self, slot: usize) -> Option<usize> {
+        let index = self.value[slot] as usize;
+        (self.slot_of[index] as usize == slot).then_some(index)
+    }
+
+    /// The block in `slot`.
+    #[must_use]
+    pub fn block_at(&self, slot: usize) -> Mat3 {
+        let block = self.values[self.value[slot] as usize];
+        if self.value_index(slot).is_some() {
+            block
+        } else {
+            block.transpose()
+        }
+    }
+
     /// Block (i, j), zero outside the pattern.
     #[must_use]
     pub fn block(&self, i: u32, j: u32) -> Mat3 {
-        self.slot(i, j).map_or_else(Mat3::zeros, |s| self.blocks[s])
+        self.slot(i, j)
+            .map_or_else(Mat3::zeros, |s| self.block_at(s))
     }
 
     /// Row and column of the block in `slot`.
@@ -67,39 +155,32 @@ impl BlockMatrix {
         (self.rows[slot], self.pattern.items[slot])
     }
 
-    /// Slots of the blocks stored in row `i`.
+    /// Slots of row `i`.
     #[must_use]
     pub fn row_range(&self, i: usize) -> std::ops::Range<usize> {
         self.pattern.range(i)
     }
 
-    /// Columns of the blocks stored in row `i`, sorted.
+    /// Columns of the slots of row `i`, sorted.
     #[must_use]
     pub fn columns(&self, i: usize) -> &[u32] {
         self.pattern.row(i)
     }
 
-    /// All stored blocks, row after row.
+    /// The stored blocks, row after row (of a symmetric matrix, those on and above the
+    /// diagonal).
     #[must_use]
-    pub fn blocks(&self) -> &[Mat3] {
-        &self.blocks
+    pub fn values(&self) -> &[Mat3] {
+        &self.values
     }
 
-    /// Row and column of each stored block, parallel to [`Self::blocks`].
-    pub fn entries(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
-        self.rows
-            .iter()
-            .copied()
-            .zip(self.pattern.items.iter().copied())
-    }
-
-    /// Fills every block with `f(slot, row, column)`, in parallel.
+    /// Fills every stored block with `f(value index, row, column)`, in parallel.
     pub fn fill(&mut self, f: impl Fn(usize, u32, u32) -> Mat3 + Sync) {
-        let (rows, cols) = (&self.rows, &self.pattern.items);
-        self.blocks
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(s, b)| *b = f(s, rows[s], cols[s]));
+        let (rows, cols, slot_of) = (&self.rows, &self.pattern.items, &self.slot_of);
+        self.values.par_iter_mut().enumerate().for_each(|(k, b)| {
+            let s = slot_of[k] as usize;
+            *b = f(k, rows[s], cols[s]);
+        });
     }
 
     /// y = A x.
@@ -109,15 +190,19 @@ impl BlockMatrix {
             .for_each(|(c, y)| self.mul_rows(c * CHUNK, x, y));
     }
 
-    /// Rows `first..first + y.len()` of A x into `y`.
+    /// Rows `first..first + y.len()` of A x into `y`: each row's slots in column order, the
+    /// mirrored ones (left of the diagonal) first.
     pub fn mul_rows(&self, first: usize, x: &[Vec3], y: &mut [Vec3]) {
+        let cols = &self.pattern.items;
         for (i, yi) in (first..).zip(y) {
             let range = self.pattern.range(i);
+            let own = self.own[i] as usize;
             let mut sum = Vec3::zeros();
-            for (block, &col) in self.blocks[range.clone()]
-                .iter()
-                .zip(&self.pattern.items[range])
-            {
+            for s in range.start..own {
+                sum += self.values[self.value[s] as usize].tr_mul(&x[cols[s] as usize]);
+            }
+            let stored = self.value_start[i] as usize..self.value_start[i + 1] as usize;
+            for (block, &col) in self.values[stored].iter().zip(&cols[own..range.end]) {
                 sum += block * x[col as usize];
             }
             *yi = sum;
@@ -147,7 +232,7 @@ mod tests {
     #[test]
     fn product_matches_dense() {
         let mut a = BlockMatrix::from_pairs(3, [(0, 2), (2, 1)]);
-        assert_eq!(a.blocks().len(), 3 + 4);
+        assert_eq!(a.values().len(), 3 + 4);
         assert!(a.slot(0, 1).is_none());
         a.fill(|s, i, j| Mat3::from_fn(|r, c| (s + 3 * r + c) as f64 + f64::from(i + 10 * j)));
         let x = [
@@ -164,5 +249,36 @@ mod tests {
             }
             assert_eq!(y[i as usize], expect);
         }
+    }
+
+    #[test]
+    fn symmetric_storage_makes_the_product_of_both_triangles_to_the_bit() {
+        let pairs = [(0, 3), (3, 1), (1, 2), (4, 0), (2, 4)];
+        let mut sym = BlockMatrix::symmetric(5, pairs);
+        let mut full = BlockMatrix::from_pairs(5, pairs);
+        assert_eq!((sym.values().len(), full.values().len()), (5 + 5, 5 + 10));
+        assert_eq!(sym.slots(), full.slots());
+        let upper = |i: u32, j: u32| {
+            let (a, b) = (i.min(j), i.max(j));
+            let m = Mat3::from_fn(|r, c| ((a * 7 + b * 3) as f64 + (r * 3 + c) as f64).sin());
+            let m = if a == b { m + m.transpose() } else { m };
+            if i <= j { m } else { m.transpose() }
+        };
+        sym.fill(|_, i, j| {
+            assert!(i <= j, "({i}, {j}) stored");
+            upper(i, j)
+        });
+        full.fill(|_, i, j| upper(i, j));
+        for s in 0..full.slots() {
+            assert_eq!(sym.entry(s), full.entry(s));
+            assert_eq!(sym.block_at(s), full.block_at(s));
+        }
+        let x: Vec<Vec3> = (0..5)
+            .map(|i| Vec3::new(1.0 + f64::from(i), -0.3 * f64::from(i), 0.7).map(f64::cos))
+            .collect();
+        let (mut ys, mut yf) = (vec![Vec3::zeros(); 5], vec![Vec3::zeros(); 5]);
+        sym.mul_into(&x, &mut ys);
+        full.mul_into(&x, &mut yf);
+        assert_eq!(ys, yf);
     }
 }

@@ -72,7 +72,7 @@ struct Level {
     /// The nodes of the level above in each aggregate.
     members: Csr,
     matrix: BlockMatrix,
-    /// The slots of the level above's matrix whose blocks sum to each slot here.
+    /// The slots of the level above's matrix whose blocks sum to each block here.
     sources: Csr,
     inverse_diagonal: Vec<Mat3>,
     /// Right-hand side, iterate and scratch.
@@ -103,7 +103,7 @@ fn aggregate(a: &BlockMatrix) -> (Vec<u32>, usize) {
     const NONE: u32 = u32::MAX;
     let n = a.size();
     let diagonal: Vec<f64> = (0..n).map(|i| a.block(i as u32, i as u32).norm()).collect();
-    let (diagonal, blocks) = (&diagonal, a.blocks());
+    let diagonal = &diagonal;
     let strong = |v: usize| {
         let slots = a.row_range(v);
         a.columns(v)
@@ -111,7 +111,7 @@ fn aggregate(a: &BlockMatrix) -> (Vec<u32>, usize) {
             .zip(slots)
             .filter_map(move |(&u, slot)| {
                 let scale = (diagonal[v] * diagonal[u as usize]).sqrt();
-                (blocks[slot].norm() >= STRENGTH * scale).then_some(u)
+                (a.block_at(slot).norm() >= STRENGTH * scale).then_some(u)
             })
     };
     let mut parent = vec![NONE; n];
@@ -143,7 +143,7 @@ impl Level {
     /// The aggregates of `above` and the pattern and gather tables between them.
     fn new(above: &BlockMatrix) -> Self {
         let (parent, count) = aggregate(above);
-        let slots = above.blocks().len();
+        let slots = above.slots();
         let coarse_pair = |s: usize| {
             let (i, j) = above.entry(s);
             (parent[i as usize], parent[j as usize])
@@ -153,7 +153,8 @@ impl Level {
             .map(|s| {
                 let (i, j) = coarse_pair(s);
                 let slot = matrix.slot(i, j).expect("aggregate pair in pattern");
-                (slot as u32, s as u32)
+                let value = matrix.value_index(slot).expect("a general matrix");
+                (value as u32, s as u32)
             })
             .collect();
         sources.sort_unstable();
@@ -163,7 +164,7 @@ impl Level {
         members.sort_unstable();
         Self {
             members: csr_from_sorted(count, &members),
-            sources: csr_from_sorted(matrix.blocks().len(), &sources),
+            sources: csr_from_sorted(matrix.values().len(), &sources),
             inverse_diagonal: vec![Mat3::identity(); count],
             r: vec![Vec3::zeros(); count],
             x: vec![Vec3::zeros(); count],
@@ -177,7 +178,7 @@ impl Level {
     fn gather(&mut self, above: impl Fn(usize) -> Mat3 + Sync) {
         let sources = &self.sources;
         self.matrix
-            .fill(|slot, _, _| sources.row(slot).iter().map(|&s| above(s as usize)).sum());
+            .fill(|value, _, _| sources.row(value).iter().map(|&s| above(s as usize)).sum());
         invert_diagonal(&self.matrix, &mut self.inverse_diagonal, |_, d| d);
     }
 }
@@ -315,10 +316,10 @@ impl Multigrid {
             if k == 0 {
                 level.gather(|s| {
                     let (i, j) = above.entry(s);
-                    filtered(i as usize, j as usize, above.blocks()[s])
+                    filtered(i as usize, j as usize, above.block_at(s))
                 });
             } else {
-                level.gather(|s| above.blocks()[s]);
+                level.gather(|s| above.block_at(s));
             }
             above = &level.matrix;
         }
@@ -328,11 +329,11 @@ impl Multigrid {
                 return None;
             }
             let mut dense = DMatrix::zeros(3 * m, 3 * m);
-            for (slot, block) in l.matrix.blocks().iter().enumerate() {
+            for slot in 0..l.matrix.slots() {
                 let (i, j) = l.matrix.entry(slot);
                 dense
                     .fixed_view_mut::<3, 3>(3 * i as usize, 3 * j as usize)
-                    .copy_from(block);
+                    .copy_from(&l.matrix.block_at(slot));
             }
             Cholesky::new(dense)
         });
