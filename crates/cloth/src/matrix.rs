@@ -33,6 +33,8 @@ pub struct BlockMatrix {
     /// where that row's own blocks start in `values` (one more entry, the end).
     own: Vec<u32>,
     value_start: Vec<u32>,
+    /// Per row, the slot of its diagonal block.
+    diagonal: Vec<u32>,
     /// Per stored block, its slot.
     slot_of: Vec<u32>,
     values: Vec<Mat3>,
@@ -92,7 +94,9 @@ impl BlockMatrix {
             .collect();
         let mut value_start: Vec<u32> = own.iter().map(|&s| value[s as usize]).collect();
         value_start.push(slot_of.len() as u32);
+        let diagonal = (0..n as u32).map(|i| find(i, i)).collect();
         Self {
+            diagonal,
             values: vec![Mat3::zeros(); slot_of.len()],
             rows: all.iter().map(|&(i, _)| i).collect(),
             pattern,
@@ -142,6 +146,22 @@ impl BlockMatrix {
         }
     }
 
+    /// The diagonal block of row `i`.
+    #[must_use]
+    pub fn diagonal(&self, i: usize) -> Mat3 {
+        self.values[self.value[self.diagonal[i] as usize] as usize]
+    }
+
+    /// The slots of row `i` with their columns and blocks, in column order.
+    pub fn row_blocks(&self, i: usize) -> impl Iterator<Item = (usize, u32, Mat3)> + '_ {
+        let own = self.own[i] as usize;
+        self.pattern.range(i).map(move |s| {
+            let block = self.values[self.value[s] as usize];
+            let block = if s < own { block.transpose() } else { block };
+            (s, self.pattern.items[s], block)
+        })
+    }
+
     /// Block (i, j), zero outside the pattern.
     #[must_use]
     pub fn block(&self, i: u32, j: u32) -> Mat3 {
@@ -181,6 +201,22 @@ impl BlockMatrix {
             let s = slot_of[k] as usize;
             *b = f(k, rows[s], cols[s]);
         });
+    }
+
+    /// Fills the stored blocks row by row, rows in parallel: `f(row, blocks)` gets the row's
+    /// stored blocks (all of them in a general matrix), in column order.
+    pub fn fill_rows(&mut self, f: impl Fn(usize, &mut [Mat3]) + Sync) {
+        let mut rows = Vec::with_capacity(self.size());
+        let mut rest = self.values.as_mut_slice();
+        for w in self.value_start.windows(2) {
+            let (row, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
+            rows.push(row);
+            rest = tail;
+        }
+        rows.into_par_iter()
+            .enumerate()
+            .with_min_len(CHUNK / 16)
+            .for_each(|(i, row)| f(i, row));
     }
 
     /// y = A x.
