@@ -108,7 +108,7 @@ impl Gather {
 /// Buffers and gather tables for a model; see the module docs.
 #[derive(Clone, Debug)]
 pub(crate) struct Assembly {
-    pub matrix: BlockMatrix,
+    pub matrix: BlockMatrix<f32>,
     pub force: Vec<Vec3>,
     /// Per stored matrix block, and per particle: the d-space slots that sum to it.
     blocks: Gather,

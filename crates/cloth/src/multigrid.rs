@@ -42,7 +42,7 @@ use rayon::prelude::*;
 use tailor_subdiv::topology::Csr;
 
 use crate::energy::{Mat3, Vec3};
-use crate::matrix::{BlockMatrix, csr_from_sorted};
+use crate::matrix::{BlockMatrix, Precision, csr_from_sorted};
 use crate::reduce::CHUNK;
 
 /// Relative size of a coupling that [`aggregate`] follows (the 64² drape in contact: 0 takes
@@ -76,7 +76,7 @@ struct Level {
     parent: Vec<u32>,
     /// The nodes of the level above in each aggregate.
     members: Csr,
-    matrix: BlockMatrix,
+    matrix: BlockMatrix<f64>,
     /// Per slot of the level above's matrix, the block of its aggregates' row here it sums to
     /// (its index among that row's blocks).
     target: Vec<u32>,
@@ -95,6 +95,9 @@ pub(crate) struct Multigrid {
     /// filtered diagonal blocks.
     free: Vec<bool>,
     inverse_diagonal: Vec<Mat3>,
+    /// The filter of the last update: a re-solve inverts again only the blocks whose filter
+    /// changed.
+    last_filter: Vec<Mat3>,
     /// Dense Cholesky factor of the coarsest level, when it is small and positive definite.
     coarsest: Option<Cholesky<f64, Dyn>>,
     /// Whether `levels` have been built (at the first update).
@@ -105,7 +108,7 @@ pub(crate) struct Multigrid {
 /// couplings only: (i, j) is strong when ‖A_ij‖ ≥ [`STRENGTH`] · √(‖A_ii‖ ‖A_jj‖) (Frobenius
 /// norms; Vaněk, Mandel & Brezina's strength of connection), every stored pair when the
 /// diagonal is zero (a coarse pattern not yet filled).
-fn aggregate(a: &BlockMatrix) -> (Vec<u32>, usize) {
+fn aggregate<T: Precision>(a: &BlockMatrix<T>) -> (Vec<u32>, usize) {
     const NONE: u32 = u32::MAX;
     let n = a.size();
     let diagonal: Vec<f64> = (0..n).map(|i| a.block(i as u32, i as u32).norm()).collect();
@@ -147,7 +150,7 @@ fn aggregate(a: &BlockMatrix) -> (Vec<u32>, usize) {
 
 impl Level {
     /// The aggregates of `above` and the pattern and gather tables between them.
-    fn new(above: &BlockMatrix) -> Self {
+    fn new<T: Precision>(above: &BlockMatrix<T>) -> Self {
         let (parent, count) = aggregate(above);
         let slots = above.slots();
         let coarse_pair = |s: usize| {
@@ -181,7 +184,11 @@ impl Level {
     /// Sums the blocks of the level above, each as `block(row, column, block)` makes it, into
     /// this level's matrix: each coarse row from the rows of its aggregate's members, in order,
     /// so every block here is the sum of its sources in the order of their slots above.
-    fn gather(&mut self, above: &BlockMatrix, block: impl Fn(usize, usize, Mat3) -> Mat3 + Sync) {
+    fn gather<T: Precision>(
+        &mut self,
+        above: &BlockMatrix<T>,
+        block: impl Fn(usize, usize, Mat3) -> Mat3 + Sync,
+    ) {
         let (members, target) = (&self.members, &self.target);
         self.matrix.fill_rows(|row, blocks| {
             blocks.fill(Mat3::zeros());
@@ -191,19 +198,28 @@ impl Level {
                 }
             }
         });
-        invert_diagonal(&self.matrix, &mut self.inverse_diagonal, |_, d| d);
+        invert_diagonal(
+            &self.matrix,
+            &mut self.inverse_diagonal,
+            |_, d| d,
+            |_| false,
+        );
     }
 }
 
-/// The inverse of `filtered(i, block)` for each diagonal block of `a`, or the identity where it
-/// is singular.
-fn invert_diagonal(
-    a: &BlockMatrix,
+/// The inverse of `filtered(i, block)` for each diagonal block of `a` but those `kept`, or the
+/// identity where it is singular.
+fn invert_diagonal<T: Precision>(
+    a: &BlockMatrix<T>,
     out: &mut [Mat3],
     filtered: impl Fn(usize, Mat3) -> Mat3 + Sync,
+    kept: impl Fn(usize) -> bool + Sync,
 ) {
     out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
         for (i, d) in (c * CHUNK..).zip(out) {
+            if kept(i) {
+                continue;
+            }
             let block = filtered(i, a.diagonal(i));
             *d = block.try_inverse().unwrap_or_else(Mat3::identity);
         }
@@ -222,7 +238,7 @@ fn first_sweep(x: &mut [Vec3], r: &[Vec3], inverse_diagonal: &[Mat3]) {
 }
 
 /// t = r − A x.
-fn residual(t: &mut [Vec3], r: &[Vec3], a: &BlockMatrix, x: &[Vec3]) {
+fn residual(t: &mut [Vec3], r: &[Vec3], a: &BlockMatrix<f64>, x: &[Vec3]) {
     t.par_chunks_mut(COARSE_ROWS)
         .enumerate()
         .for_each(|(c, t)| {
@@ -234,7 +250,13 @@ fn residual(t: &mut [Vec3], r: &[Vec3], a: &BlockMatrix, x: &[Vec3]) {
 }
 
 /// t = x + ω D⁻¹ (r − A x) (the second sweep, written beside x).
-fn last_sweep(t: &mut [Vec3], x: &[Vec3], r: &[Vec3], a: &BlockMatrix, inverse_diagonal: &[Mat3]) {
+fn last_sweep(
+    t: &mut [Vec3],
+    x: &[Vec3],
+    r: &[Vec3],
+    a: &BlockMatrix<f64>,
+    inverse_diagonal: &[Mat3],
+) {
     t.par_chunks_mut(COARSE_ROWS)
         .enumerate()
         .for_each(|(c, t)| {
@@ -280,35 +302,36 @@ impl Multigrid {
             built: false,
             free: vec![true; n],
             inverse_diagonal: vec![Mat3::identity(); n],
+            last_filter: vec![Mat3::identity(); n],
             coarsest: None,
         }
     }
 
     /// The levels below `fine`, down to [`COARSEST`] nodes.
-    fn build(&mut self, fine: &BlockMatrix) {
+    fn build(&mut self, fine: &BlockMatrix<f32>) {
         self.levels.clear();
-        loop {
-            let above = self.levels.last().map_or(fine, |l| &l.matrix);
-            let size = above.size();
-            if size <= COARSEST {
-                break;
-            }
-            let level = Level::new(above);
-            if level.x.len() as f64 > MIN_REDUCTION * size as f64 {
-                break;
-            }
+        let coarser = |above: usize, make: &dyn Fn() -> Level| {
+            (above > COARSEST)
+                .then(make)
+                .filter(|level| level.x.len() as f64 <= MIN_REDUCTION * above as f64)
+        };
+        let mut next = coarser(fine.size(), &|| Level::new(fine));
+        while let Some(level) = next {
+            let above = &level.matrix;
+            next = coarser(above.size(), &|| Level::new(above));
             self.levels.push(level);
         }
         self.built = true;
     }
 
     /// The coarse matrices, diagonal inverses and coarsest factor for the fine matrix `a`
-    /// filtered by `filter`; with `coarse` false only the fine level's diagonal inverses,
-    /// the coarse levels keeping the matrices of the last full update. The preconditioner
+    /// filtered by `filter`; with `coarse` false (the matrix of the last update, a filter
+    /// with more contacts) only the fine level's diagonal inverses whose filter changed, the
+    /// coarse levels keeping the matrices of the last full update. The preconditioner
     /// stays symmetric and positive on the filtered space either way (the fine level filters
     /// what it restricts and prolongs), so a re-solve of the same matrix with a few more
     /// contacts need not gather the coarse matrices again.
-    pub fn update(&mut self, a: &BlockMatrix, filter: &[Mat3], coarse: bool) {
+    pub fn update(&mut self, a: &BlockMatrix<f32>, filter: &[Mat3], coarse: bool) {
         if !self.built {
             self.build(a);
         }
@@ -327,18 +350,24 @@ impl Multigrid {
                 filter[i] * block * filter[j]
             }
         };
-        invert_diagonal(a, &mut self.inverse_diagonal, |i, d| filtered(i, i, d));
+        let last = &self.last_filter;
+        invert_diagonal(
+            a,
+            &mut self.inverse_diagonal,
+            |i, d| filtered(i, i, d),
+            |i| !coarse && filter[i] == last[i],
+        );
+        self.last_filter.copy_from_slice(filter);
         if !coarse {
             return;
         }
-        let mut above: &BlockMatrix = a;
-        for (k, level) in self.levels.iter_mut().enumerate() {
-            if k == 0 {
-                level.gather(above, filtered);
-            } else {
+        if let Some((first, below)) = self.levels.split_first_mut() {
+            first.gather(a, filtered);
+            let mut above = &first.matrix;
+            for level in below {
                 level.gather(above, |_, _, block| block);
+                above = &level.matrix;
             }
-            above = &level.matrix;
         }
         self.coarsest = self.levels.last().and_then(|l| {
             let m = l.matrix.size();
@@ -427,7 +456,7 @@ mod tests {
 
     /// An n × n grid of particles coupled to their 8 neighbours: a random SPD block on each
     /// diagonal (mass plus stiffness), −k I between neighbours, diagonally dominant.
-    fn grid(n: u32, rng: &mut Rng) -> BlockMatrix {
+    fn grid(n: u32, rng: &mut Rng) -> BlockMatrix<f32> {
         let id = |i: u32, j: u32| i * n + j;
         let mut pairs = Vec::new();
         for i in 0..n {
@@ -440,7 +469,7 @@ mod tests {
                 }
             }
         }
-        let mut a = BlockMatrix::from_pairs((n * n) as usize, pairs);
+        let mut a = BlockMatrix::symmetric((n * n) as usize, pairs);
         let diagonal: Vec<Mat3> = (0..n * n)
             .map(|_| {
                 let m = Mat3::from_fn(|_, _| rng.range(-1.0, 1.0));
@@ -478,7 +507,7 @@ mod tests {
     #[test]
     fn aggregates_do_not_follow_weak_couplings() {
         // A chain of six, every link strong but the one between 2 and 3.
-        let mut a = BlockMatrix::from_pairs(6, (1..6).map(|i| (i - 1, i)));
+        let mut a = BlockMatrix::<f64>::from_pairs(6, (1..6).map(|i| (i - 1, i)));
         a.fill(|_, i, j| match (i.min(j), i.max(j)) {
             (d, e) if d == e => Mat3::identity() * 4.0,
             (2, 3) => Mat3::identity() * -1e-3,
@@ -487,7 +516,7 @@ mod tests {
         let (parent, count) = aggregate(&a);
         assert_eq!((parent, count), (vec![0, 0, 0, 1, 1, 1], 2));
         // Without values (a pattern) every pair counts, and 2 joins 3.
-        let pattern = BlockMatrix::from_pairs(6, (1..6).map(|i| (i - 1, i)));
+        let pattern = BlockMatrix::<f64>::from_pairs(6, (1..6).map(|i| (i - 1, i)));
         let (parent, _) = aggregate(&pattern);
         assert_eq!(parent[2], parent[3]);
     }

@@ -71,7 +71,7 @@ fn dot(a: &[Vec3], b: &[Vec3], partials: &mut [[f64; 2]]) -> f64 {
 impl Pcg {
     /// Buffers and hierarchy for systems with the pattern of `pattern` (its values unused).
     #[must_use]
-    pub fn new(pattern: &BlockMatrix) -> Self {
+    pub fn new(pattern: &BlockMatrix<f32>) -> Self {
         let n = pattern.size();
         Self {
             r: vec![Vec3::zeros(); n],
@@ -86,7 +86,7 @@ impl Pcg {
     /// Sets up the preconditioner for `a` filtered by `filter`. With `same_matrix`, `a` is the
     /// matrix of the last call, only the filter changed (more contacts), and the coarse
     /// levels are kept.
-    pub fn prepare(&mut self, a: &BlockMatrix, filter: &[Mat3], same_matrix: bool) {
+    pub fn prepare(&mut self, a: &BlockMatrix<f32>, filter: &[Mat3], same_matrix: bool) {
         self.multigrid.update(a, filter, !same_matrix);
     }
 
@@ -96,7 +96,7 @@ impl Pcg {
     /// `a` must have the pattern given to [`Self::new`].
     pub fn solve(
         &mut self,
-        a: &BlockMatrix,
+        a: &BlockMatrix<f32>,
         filter: &[Mat3],
         b: &[Vec3],
         x: &mut [Vec3],
@@ -197,8 +197,8 @@ mod tests {
     use super::*;
 
     /// A tridiagonal SPD block matrix: 4 I on the diagonal, −I between neighbours.
-    fn chain(n: usize) -> BlockMatrix {
-        let mut a = BlockMatrix::from_pairs(n, (1..n as u32).map(|i| (i - 1, i)));
+    fn chain(n: usize) -> BlockMatrix<f32> {
+        let mut a = BlockMatrix::symmetric(n, (1..n as u32).map(|i| (i - 1, i)));
         a.fill(|_, i, j| {
             if i == j {
                 Mat3::identity() * 4.0 + Mat3::from_fn(|r, c| 0.1 * (r + c) as f64)
