@@ -20,7 +20,7 @@
 //!   of the fine blocks between two aggregates, gathered through tables made once, in a fixed
 //!   order.
 //! - **The preconditioner** per CG iteration is additive at the fine level: the damped
-//!   block-Jacobi step ω D⁻¹ r (weight [`OMEGA`]) plus the prolonged V-cycle of the coarse
+//!   block-Jacobi step ω D⁻¹ r (weight [`FINE_OMEGA`]) plus the prolonged V-cycle of the coarse
 //!   levels on the restricted r. It never multiplies by the fine matrix, whose blocks are
 //!   most of the memory a CG iteration reads: the multiplicative cycle (sweep, residual,
 //!   coarse correction, second sweep) read them twice more per iteration, and at 128² the
@@ -50,8 +50,17 @@ use crate::reduce::CHUNK;
 /// out the bending springs' weak reach across two edges, aggregates of 6 and 44 iterations).
 const STRENGTH: f64 = 0.1;
 
-/// Weight of each damped block-Jacobi sweep.
-const OMEGA: f64 = 0.7;
+/// Weight of each damped block-Jacobi sweep of the coarse levels' V-cycle. The cycle stays
+/// positive definite only while the sweep converges, ω < 2 / λ_max(D⁻¹ A): 1.3 already breaks
+/// the 64² drape's solve (hundreds of CG iterations); 0.85 keeps a margin for stiffer
+/// garments and takes 5% fewer iterations than 0.7.
+const OMEGA: f64 = 0.85;
+
+/// Weight of the fine level's additive part ω D⁻¹ r: positive definite for any weight, it
+/// only balances the fine part against the coarse one. With the coarse sweeps at [`OMEGA`],
+/// CG iterations a frame over the whole drape: 64² 39.0 at 0.7, 36.3 at 1.2 (37.5 at 1.5);
+/// 128² 36.9 and 35.4.
+const FINE_OMEGA: f64 = 1.2;
 
 /// A level with at most this many nodes is the coarsest.
 const COARSEST: usize = 64;
@@ -388,7 +397,7 @@ impl Multigrid {
     /// The fine level's part of the preconditioner at particle `i` of the residual `r`:
     /// ω S_i D_i⁻¹ r_i, for the `filter` S given to the last [`Self::update`].
     pub fn smooth(&self, filter: &[Mat3], i: usize, r: Vec3) -> Vec3 {
-        filter[i] * (self.inverse_diagonal[i] * r) * OMEGA
+        filter[i] * (self.inverse_diagonal[i] * r) * FINE_OMEGA
     }
 
     /// The coarse levels' part of the preconditioner on the fine residual `r` (filtered):
