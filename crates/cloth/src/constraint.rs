@@ -15,7 +15,7 @@
 //!   and velocity at a time, and the goal follows that line.
 //! - **Contacts** hold a vertex against a plane with unit normal n moving with a velocity, its
 //!   normal velocity prescribed and tangential velocity free: those the caller sets, plus those
-//!   the collision pass ([`crate::collision`]) finds before each substep.
+//!   the collision pass (the `collision` module) finds before each substep.
 //!
 //! When one vertex has several, pins win over attachments, attachments over contacts.
 

@@ -37,7 +37,6 @@ pub trait Precision: nalgebra::Scalar + Copy + Into<f64> + Send + Sync {
 }
 
 impl Precision for f32 {
-    #[allow(clippy::cast_possible_truncation)]
     fn round(x: f64) -> Self {
         x as f32
     }

@@ -17,16 +17,17 @@
 //!   which is coarsened the same way until a level has at most [`COARSEST`] nodes.
 //! - **Coarse matrices**, per solve: with the piecewise-constant prolongation P (a coarse node's
 //!   3-vector copied to every particle of its aggregate), the Galerkin product Pᵀ A P is the sum
-//!   of the fine blocks between two aggregates, gathered through tables made once, in a fixed
-//!   order.
+//!   of the fine blocks between two aggregates: each coarse row sums the rows of its
+//!   aggregate's members in order (sequential reads, a fixed order), through a table made once
+//!   of where each fine slot lands.
 //! - **The preconditioner** per CG iteration is additive at the fine level: the damped
 //!   block-Jacobi step ω D⁻¹ r (weight [`FINE_OMEGA`]) plus the prolonged V-cycle of the coarse
 //!   levels on the restricted r. It never multiplies by the fine matrix, whose blocks are
 //!   most of the memory a CG iteration reads: the multiplicative cycle (sweep, residual,
 //!   coarse correction, second sweep) read them twice more per iteration, and at 128² the
 //!   products are bound by memory bandwidth. CG takes about twice the iterations (the 64²
-//!   drape: 41 a frame where the multiplicative cycle took 18) and the drape is 15–20%
-//!   faster. Below the fine level each V-cycle is multiplicative: a damped
+//!   drape: 41 a frame where the multiplicative cycle took 18; 36 since the weights were
+//!   tuned, [`FINE_OMEGA`] and [`OMEGA`]) and the drape is 15–20% faster. Below the fine level each V-cycle is multiplicative: a damped
 //!   block-Jacobi sweep, the residual restricted to the next level, the cycle there, its
 //!   correction prolonged, a second sweep; the coarsest level is solved by dense Cholesky.
 //!   Both parts are symmetric and positive, so CG stays CG.
@@ -34,8 +35,8 @@
 //! The constraint filter S of [`crate::pcg`] enters at the fine level: the hierarchy is built
 //! on S A S + (I − S), which decouples the constrained components, and every fine residual and
 //! correction passes through S (without that, the coarse levels see the contacts as free and
-//! CG needs nearly three times the iterations). Every pass runs over fixed chunks or rows with a fixed order of
-//! sums, so the result does not depend on the number of threads.
+//! CG needs nearly three times the iterations). Every pass runs over fixed chunks or rows
+//! with a fixed order of sums, so the result does not depend on the number of threads.
 
 use nalgebra::{DMatrix, DVector, Dyn, linalg::Cholesky};
 use rayon::prelude::*;

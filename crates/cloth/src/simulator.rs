@@ -9,7 +9,7 @@
 //! That is exactly one Newton iteration on the residual R(v) = M (v − v₀) − h f(x₀ + h v, v)
 //! started from v = 0 (x = x₀), which is how it is computed here (CG warm-started at Δv = 0).
 //! When the solution takes free vertices into the body, they become contacts and the same
-//! system is solved again from it (up to [`CONTACT_ROUNDS`] times; see [`crate::collision`]).
+//! system is solved again from it (up to `CONTACT_ROUNDS` times; see the `collision` module).
 //! With `newton_iterations > 1`, further iterations re-linearize at the new iterate; R is the
 //! gradient of the *incremental potential*
 //!
