@@ -22,10 +22,9 @@
 //! The product is a parallel loop over rows with a fixed order inside each row (the slots in
 //! column order): the same bytes on any thread count.
 
+use nalgebra::Matrix3;
 use rayon::prelude::*;
 use tailor_subdiv::topology::Csr;
-
-use nalgebra::Matrix3;
 
 use crate::energy::{Mat3, Vec3};
 use crate::reduce::CHUNK;
@@ -58,10 +57,9 @@ pub struct BlockMatrix<T: Precision> {
     /// Per slot, the index of its block in `values` (below the diagonal of a symmetric matrix:
     /// of its mirror's, read transposed).
     value: Vec<u32>,
-    /// Per row, the first slot whose block is its own (the diagonal's, when symmetric), and
-    /// where that row's own blocks start in `values` (one more entry, the end).
+    /// Per row, the first slot whose block is its own (the diagonal's, when symmetric): the
+    /// row's own blocks are stored in a run of `values` from `value` of that slot.
     own: Vec<u32>,
-    value_start: Vec<u32>,
     /// Per row, the slot of its diagonal block.
     diagonal: Vec<u32>,
     /// Per stored block, its slot.
@@ -121,8 +119,6 @@ impl<T: Precision> BlockMatrix<T> {
                 (range.start + below) as u32
             })
             .collect();
-        let mut value_start: Vec<u32> = own.iter().map(|&s| value[s as usize]).collect();
-        value_start.push(slot_of.len() as u32);
         let diagonal = (0..n as u32).map(|i| find(i, i)).collect();
         Self {
             diagonal,
@@ -131,7 +127,6 @@ impl<T: Precision> BlockMatrix<T> {
             pattern,
             value,
             own,
-            value_start,
             slot_of,
         }
     }
@@ -236,10 +231,11 @@ impl<T: Precision> BlockMatrix<T> {
     /// Fills the stored blocks row by row, rows in parallel: `f(row, blocks)` gets the row's
     /// stored blocks (all of them in a general matrix), in column order.
     pub fn fill_rows(&mut self, f: impl Fn(usize, &mut [Matrix3<T>]) + Sync) {
-        let mut rows = Vec::with_capacity(self.size());
+        let (pattern, own) = (&self.pattern, &self.own);
+        let mut rows = Vec::with_capacity(own.len());
         let mut rest = self.values.as_mut_slice();
-        for w in self.value_start.windows(2) {
-            let (row, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
+        for (i, &first) in own.iter().enumerate() {
+            let (row, tail) = rest.split_at_mut(pattern.range(i).end - first as usize);
             rows.push(row);
             rest = tail;
         }
@@ -267,8 +263,8 @@ impl<T: Precision> BlockMatrix<T> {
             for s in range.start..own {
                 sum += tr_mul(&self.values[self.value[s] as usize], &x[cols[s] as usize]);
             }
-            let stored = self.value_start[i] as usize..self.value_start[i + 1] as usize;
-            for (block, &col) in self.values[stored].iter().zip(&cols[own..range.end]) {
+            let stored = &self.values[self.value[own] as usize..];
+            for (block, &col) in stored.iter().zip(&cols[own..range.end]) {
                 sum += mul(block, &x[col as usize]);
             }
             *yi = sum;

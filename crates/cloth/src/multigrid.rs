@@ -27,7 +27,8 @@
 //!   coarse correction, second sweep) read them twice more per iteration, and at 128² the
 //!   products are bound by memory bandwidth. CG takes about twice the iterations (the 64²
 //!   drape: 41 a frame where the multiplicative cycle took 18; 36 since the weights were
-//!   tuned, [`FINE_OMEGA`] and [`OMEGA`]) and the drape is 15–20% faster. Below the fine level each V-cycle is multiplicative: a damped
+//!   tuned, [`FINE_OMEGA`] and [`OMEGA`]) and the drape is 15–20% faster. Below the fine
+//!   level each V-cycle is multiplicative: a damped
 //!   block-Jacobi sweep, the residual restricted to the next level, the cycle there, its
 //!   correction prolonged, a second sweep; the coarsest level is solved by dense Cholesky.
 //!   Both parts are symmetric and positive, so CG stays CG.

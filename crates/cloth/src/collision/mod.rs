@@ -51,7 +51,7 @@
 //!    when step 5 pushed anything: a push can fold a layer lying on the body through the one
 //!    above it (the fold scenario's lower layer: two of its faces crossed after a push
 //!    under two of three 1% changes of the CG tolerance), so step 4 runs again on the
-//!    positions steps 5 and 6 left, the pushed vertices a hundred times heavier, and the
+//!    positions steps 5 and 6 left, the vertices they moved a hundred times heavier, and the
 //!    projection once more for what that moved.
 //!
 //! The body is one-sided: its faces' counter-clockwise normals point outwards (a closed
@@ -101,6 +101,23 @@ pub(crate) struct Collisions {
     /// the positions the body passes left.
     own_velocity: Vec<Vec3>,
     reaching: Vec<Vec3>,
+}
+
+/// Marks in `moved` the vertices the body passes moved from `before`, relaxes strain around
+/// them, and pushes out whatever that brought back within half the thickness; returns how
+/// many the projection moved.
+fn relax_what_moved(
+    obstacle: &mut Obstacle,
+    before: &[Point],
+    moved: &mut Vec<bool>,
+    thickness: f64,
+    motion: &mut Motion,
+    relax: &mut impl FnMut(&mut Motion, &[bool]),
+) -> Result<u32, CollideError> {
+    moved.clear();
+    moved.extend(before.iter().zip(motion.x.iter()).map(|(a, b)| a != b));
+    relax(motion, moved);
+    obstacle.project(thickness, motion)
 }
 
 /// The moving garment of one substep: start positions, and end positions and velocities the
@@ -303,28 +320,20 @@ impl Collisions {
             self.before.extend_from_slice(motion.x);
             let pushed = obstacle.resolve_impacts(&mut self.cloth, thickness, motion)?
                 + obstacle.project(thickness, motion)?;
+            let (before, moved) = (&self.before, &mut self.moved);
             if pushed > 0 {
-                // The pushes strain the edges around the pushed vertices: relax around them,
-                // then push out whatever that brought back within half the thickness.
-                self.moved.clear();
-                self.moved
-                    .extend(self.before.iter().zip(motion.x.iter()).map(|(a, b)| a != b));
-                relax(motion, &self.moved);
-                resolved += obstacle.project(thickness, motion)?;
+                // The pushes strain the edges around the pushed vertices.
+                resolved += relax_what_moved(obstacle, before, moved, thickness, motion, relax)?;
             }
             resolved += pushed;
             if let Some(surface) = &mut self.surface {
                 let lifted = obstacle.clear_surface(surface, thickness, motion)?;
                 if lifted > 0 {
                     // Lifting control points strains the edges around them as much as a push
-                    // (the cape's edges went from 5% to 11% in one substep): relax around
-                    // everything the body passes moved, then project and lift again, so the
-                    // collision passes keep the last word.
-                    self.moved.clear();
-                    self.moved
-                        .extend(self.before.iter().zip(motion.x.iter()).map(|(a, b)| a != b));
-                    relax(motion, &self.moved);
-                    resolved += obstacle.project(thickness, motion)?;
+                    // (the cape's edges went from 5% to 11% in one substep); lift again after,
+                    // so the collision passes keep the last word.
+                    resolved +=
+                        relax_what_moved(obstacle, before, moved, thickness, motion, relax)?;
                     resolved += obstacle.clear_surface(surface, thickness, motion)?;
                 }
                 resolved += lifted;
@@ -340,7 +349,7 @@ impl Collisions {
     }
 
     /// The continuous self impacts (step 4), with the body's contact vertices [`HELD_MASS`]
-    /// times heavier, and with `pushed_heavier` the vertices the body passes pushed too.
+    /// times heavier, and with `pushed_heavier` the vertices the body passes moved too.
     fn layer_impacts(
         &mut self,
         thickness: f64,
@@ -370,7 +379,7 @@ impl Collisions {
     /// body through the one above it. The self pass changes velocities and puts positions
     /// at x₀ + h v, so for it each vertex takes the velocity that reaches the position the
     /// body passes left, (x − x₀)/h, and keeps its own plus what the pass changed; the
-    /// vertices the body pushed count [`HELD_MASS`] times heavier.
+    /// vertices the body passes moved (pushed or lifted) count [`HELD_MASS`] times heavier.
     fn recheck_layers(
         &mut self,
         thickness: f64,
