@@ -260,10 +260,14 @@ impl<T: Precision> BlockMatrix<T> {
             let range = self.pattern.range(i);
             let own = self.own[i] as usize;
             let mut sum = Vec3::zeros();
-            for s in range.start..own {
-                sum += tr_mul(&self.values[self.value[s] as usize], &x[cols[s] as usize]);
+            let mirrors = self.value[range.start..own]
+                .iter()
+                .zip(&cols[range.start..own]);
+            for (&v, &col) in mirrors {
+                sum += tr_mul(&self.values[v as usize], &x[col as usize]);
             }
-            let stored = &self.values[self.value[own] as usize..];
+            let start = self.value[own] as usize;
+            let stored = &self.values[start..start + (range.end - own)];
             for (block, &col) in stored.iter().zip(&cols[own..range.end]) {
                 sum += mul(block, &x[col as usize]);
             }
