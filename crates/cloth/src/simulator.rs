@@ -20,6 +20,12 @@
 //! decreases enough (Armijo). Stiffness Hessians are projected to PSD ([`crate::energy`]), so
 //! the matrix is SPD, CG converges and every Newton direction descends.
 //!
+//! The last iteration ends without evaluating the forces again when there is no line search
+//! to decide: friction reads the contact impulses of the solve itself, b − A Δv on the contact
+//! vertices (the constraint forces of Baraff & Witkin §5.3, zero elsewhere to the solve's
+//! tolerance), one product with A instead of a force evaluation at the new positions. The
+//! energy of a state is [`Simulator::energy`], computed when asked.
+//!
 //! A call to [`Simulator::step`] covers `dt` seconds in equal substeps no longer than
 //! [`Settings::max_substep`], so the physics do not depend on the frame rate. A substep that
 //! produces a non-finite value or whose solve fails is retried as two halves, down to
@@ -28,7 +34,7 @@
 
 use tailor_subdiv::{Point, StencilTable};
 
-use crate::assemble::{Assembly, Coefficients, Environment, Totals};
+use crate::assemble::{Assembly, Coefficients, Environment};
 use crate::collision::{Collisions, Motion as Substep, Obstacle, Surface};
 use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
 use crate::energy::{Mat3, Vec3};
@@ -134,8 +140,6 @@ pub struct StepReport {
     pub cg_iterations: u32,
     /// Largest |l/L − 1| over the edges at the end of the step.
     pub max_strain: f64,
-    /// Kinetic + elastic + gravitational energy at the end of the step, J.
-    pub energy: f64,
     /// Obstacle contact constraints in the last substep.
     pub contacts: u32,
     /// Impacts and projections the collision fail-safes made over all substeps.
@@ -154,6 +158,9 @@ struct Work {
     trial: Vec<Vec3>,
     delta: Vec<Vec3>,
     rhs: Vec<Vec3>,
+    /// The contact impulses of the last solve, b − A Δv (zero on free vertices, up to the
+    /// solve's tolerance), which friction reads.
+    impulse: Vec<Vec3>,
     filter: Filter,
     /// 1 / mass, zero for a vertex whose position the constraints prescribe.
     inverse_mass: Vec<f64>,
@@ -173,12 +180,6 @@ pub struct Simulator {
     collisions: Collisions,
     strain_limiter: StrainLimiter,
     work: Work,
-}
-
-/// The incremental potential and the scalars of its evaluation.
-struct Evaluated {
-    phi: f64,
-    totals: Totals,
 }
 
 impl Simulator {
@@ -230,6 +231,7 @@ impl Simulator {
                 v: vec![Vec3::zeros(); n],
                 trial: vec![Vec3::zeros(); n],
                 delta: vec![Vec3::zeros(); n],
+                impulse: vec![Vec3::zeros(); n],
                 rhs: vec![Vec3::zeros(); n],
                 filter: Filter::new(n),
                 inverse_mass: vec![0.0; n],
@@ -426,6 +428,7 @@ impl Simulator {
             for _ in 0..count {
                 self.advance(state, dt / f64::from(count), 0, &mut report)?;
             }
+            report.max_strain = self.model.max_strain(&state.positions);
             Ok(report)
         })
     }
@@ -453,8 +456,8 @@ impl Simulator {
     }
 
     /// Evaluates at velocities `work.trial`: positions, forces, the right-hand side −R, the
-    /// incremental potential Φ and, `with_matrix`, the matrix of the next linear solve.
-    fn evaluate(&mut self, h: f64, with_matrix: bool) -> Evaluated {
+    /// matrix of the next linear solve when `with_matrix`; returns the incremental potential Φ.
+    fn evaluate(&mut self, h: f64, with_matrix: bool) -> f64 {
         let env = self.environment();
         let Work {
             x0,
@@ -490,10 +493,7 @@ impl Simulator {
         let inertia = sum_by(mass.len(), partials, |i| {
             0.5 * mass[i] * (trial[i] - v0[i]).norm_squared()
         });
-        Evaluated {
-            phi: inertia + totals.potential + h * totals.dissipation,
-            totals,
-        }
+        inertia + totals.potential + h * totals.dissipation
     }
 
     /// The second look at the body (step 1 of [`crate::collision`]): vertices the solve's
@@ -600,6 +600,15 @@ impl Simulator {
             report.newton_iterations += 1;
             self.solve(report, false)?;
             self.add_missed_contacts(t1, h, report)?;
+            let last = iteration + 1 == self.settings.newton_iterations;
+            if last {
+                // The contact impulses of the solve, b − A Δv, for friction.
+                let w = &mut self.work;
+                self.assembly.matrix.mul_into(&w.delta, &mut w.impulse);
+                for (j, b) in w.impulse.iter_mut().zip(&w.rhs) {
+                    *j = b - *j;
+                }
+            }
             let w = &self.work;
             let slope: f64 = w.rhs.iter().zip(&w.delta).map(|(r, d)| r.dot(d)).sum();
             let mut alpha = 1.0;
@@ -608,10 +617,17 @@ impl Simulator {
                 for ((t, v), d) in w.trial.iter_mut().zip(&w.v).zip(&w.delta) {
                     *t = v + d * alpha;
                 }
-                // The last iteration's end needs only forces and Φ, not another matrix.
-                let next = self.evaluate(h, iteration + 1 < self.settings.newton_iterations);
-                let enough = next.phi <= at.phi - 1e-4 * alpha * slope;
-                if !self.settings.line_search || enough || alpha < 1e-3 || !next.phi.is_finite() {
+                if last && !self.settings.line_search {
+                    // Nothing is left to decide at the last iteration's end: no forces, no Φ.
+                    for ((x, x0), v) in w.x.iter_mut().zip(&w.x0).zip(&w.trial) {
+                        *x = x0 + v * h;
+                    }
+                    break;
+                }
+                // The last iteration's end needs only Φ, not another matrix.
+                let next = self.evaluate(h, !last);
+                let enough = next <= at - 1e-4 * alpha * slope;
+                if !self.settings.line_search || enough || alpha < 1e-3 || !next.is_finite() {
                     at = next;
                     break;
                 }
@@ -629,7 +645,7 @@ impl Simulator {
                 1.0 / self.model.mass[i]
             };
         }
-        let finite = at.phi.is_finite()
+        let finite = at.is_finite()
             && w.x.iter().all(|p| p.iter().all(|c| c.is_finite()))
             && w.trial.iter().all(|v| v.iter().all(|c| c.is_finite()));
         if !finite {
@@ -644,7 +660,7 @@ impl Simulator {
         };
         // Friction first: strain limiting and the collision passes have the last word.
         self.collisions
-            .friction(&self.settings, &w.rhs, &mut motion);
+            .friction(&self.settings, &w.impulse, &mut motion);
         let limit = self.settings.strain_limit;
         if limit > 0.0 {
             self.collisions
@@ -674,13 +690,7 @@ impl Simulator {
         state.positions.copy_from_slice(&w.x);
         state.velocities.copy_from_slice(&w.trial);
         state.time = t1;
-        let mass = &self.model.mass;
-        let kinetic = sum_by(mass.len(), &mut w.partials, |i| {
-            0.5 * mass[i] * w.trial[i].norm_squared()
-        });
         report.substeps += 1;
-        report.max_strain = self.model.max_strain(&state.positions);
-        report.energy = kinetic + at.totals.potential;
         report.contacts = self.collisions.contacts.len() as u32;
         report.impacts += impacts;
         Ok(())
@@ -739,7 +749,6 @@ impl Simulator {
             state.time = t1;
             report.substeps += 1;
         }
-        report.energy = self.energy(state);
         report.max_strain = self.model.max_strain(&state.positions);
         Ok(report)
     }

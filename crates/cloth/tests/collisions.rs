@@ -173,6 +173,76 @@ fn curtain_pinned_at_two_corners_keeps_its_invariants() {
     assert!(fell > 1.0, "the curtain did not fall ({fell} m)");
 }
 
+/// A 0.3 m sheet resting on a floor under gravity tilted by `slope` radians (the floor an
+/// incline), no air drag, Coulomb friction `mu`: after `frames` frames, the mean velocity and
+/// displacement of its vertices down the slope and their largest height above the floor.
+fn slide_on_incline(slope: f64, mu: f64, frames: u32) -> (f64, f64, f64) {
+    let settings = Settings {
+        gravity: Vector3::new(slope.sin(), -slope.cos(), 0.0) * 9.81,
+        friction: mu,
+        ..Settings::default()
+    };
+    let lift = Vector3::new(0.0, settings.thickness, 0.0);
+    let mut garment = centred_sheet(6, 0.3);
+    let lifted: Vec<Point> = garment.positions().iter().map(|p| p + lift).collect();
+    garment.set_positions(&lifted).unwrap();
+    let material = Material {
+        drag: 0.0,
+        ..Material::COTTON
+    };
+    let mut sim = Simulator::new(Model::new(&garment, &material).unwrap(), settings).unwrap();
+    let floor = block(Point::new(-5.0, -1.0, -5.0), Point::new(5.0, 0.0, 5.0));
+    sim.set_obstacle(
+        floor.positions(),
+        floor.face_offsets(),
+        floor.face_vertices(),
+    )
+    .unwrap();
+    let mut state = State::at_rest(sim.model());
+    for _ in 0..frames {
+        sim.step(&mut state, FRAME).unwrap();
+    }
+    let count = state.positions.len() as f64;
+    let velocity = state.velocities.iter().map(|v| v.x).sum::<f64>() / count;
+    let moved = state
+        .positions
+        .iter()
+        .zip(&lifted)
+        .map(|(p, q)| p.x - q.x)
+        .sum::<f64>()
+        / count;
+    let height = state.positions.iter().map(|p| p.y).fold(0.0, f64::max);
+    (velocity, moved, height)
+}
+
+#[test]
+fn friction_holds_a_sheet_on_a_gentle_incline_and_slows_it_on_a_steep_one() {
+    // Coulomb: at rest while tan θ ≤ μ; else sliding at g (sin θ − μ cos θ). Half a second.
+    let (frames, time) = (12, 12.0 * FRAME);
+    let (velocity, moved, height) = slide_on_incline(20f64.to_radians(), 0.6, frames);
+    assert!(
+        velocity.abs() < 1e-3 && moved.abs() < 1e-3,
+        "sticking sheet slid: {velocity} m/s, {moved} m"
+    );
+    assert!(height < 0.01, "the sheet left the incline ({height} m)");
+    for mu in [0.0, 0.3] {
+        let slope = 30f64.to_radians();
+        let accel = 9.81 * (slope.sin() - mu * slope.cos());
+        let (velocity, moved, height) = slide_on_incline(slope, mu, frames);
+        // Backward Euler moves by h v₁ + h v₂ + …, v_k = a k h: ½ a T (T + h), h = 1/48 s.
+        let h = Settings::default().max_substep;
+        let (v, s) = (accel * time, 0.5 * accel * time * (time + h));
+        assert!(
+            (velocity - v).abs() < 0.01 * v && (moved - s).abs() < 0.01 * s,
+            "mu {mu}: {velocity} m/s after {moved} m, expected {v} m/s after {s} m"
+        );
+        assert!(
+            height < 0.01,
+            "mu {mu}: the sheet left the incline ({height} m)"
+        );
+    }
+}
+
 #[test]
 fn sheet_folds_onto_itself_without_crossing() {
     // A 2 m × 1 m strip lying on a floor; its far edge is carried over a fold line at x = 0

@@ -18,7 +18,8 @@
 //!    Without it the projection of step 5 put such vertices back by up to a centimetre at
 //!    two substeps a frame, straining the edges around them by 15–35%.
 //! 2. **Friction, after the solve** ([`Collisions::friction`]). The constraint impulse j is
-//!    what the solve's residual leaves on a contact vertex (M Δv − h f); Coulomb friction
+//!    what the linear solve's residual leaves on a contact vertex, b − A Δv (the right-hand
+//!    side the constraint filter kept the solve from meeting there); Coulomb friction
 //!    removes up to μ jₙ / m of the tangential velocity relative to the body (Bridson et al.
 //!    §7.2). The simulator then limits strain (`crate::strain_limit`), so friction cannot hold
 //!    an edge stretched; vertices near the body are kept above a floor at three quarters of
@@ -250,8 +251,8 @@ impl Collisions {
         }
     }
 
-    /// Coulomb friction on the body contacts (step 2 of the module docs); `residual` is
-    /// M (v₀ − v) + h f at the end of the solve.
+    /// Coulomb friction on the body contacts (step 2 of the module docs); `residual` is the
+    /// linear solve's b − A Δv, M (v₀ − v) + h f at the end of the solve linearized.
     pub fn friction(&mut self, settings: &Settings, residual: &[Vec3], motion: &mut Motion) {
         if self.obstacle.is_some() {
             obstacle::friction(
