@@ -24,13 +24,9 @@ scene.render.fps = 24
 scene.frame_start = 1
 scene.frame_end = 60
 
-# The sheet: a grid of n x n vertices (Blender's subdivision count is faces per side).
+# The sheet: a grid of n x n vertices (since Blender 3.0 the subdivision count is faces per side).
 bpy.ops.mesh.primitive_grid_add(x_subdivisions=n - 1, y_subdivisions=n - 1, size=2.0)
 sheet = bpy.context.active_object
-if len(sheet.data.vertices) != n * n:
-    bpy.data.objects.remove(sheet)
-    bpy.ops.mesh.primitive_grid_add(x_subdivisions=n, y_subdivisions=n, size=2.0)
-    sheet = bpy.context.active_object
 assert len(sheet.data.vertices) == n * n, len(sheet.data.vertices)
 cloth = sheet.modifiers.new("Cloth", "CLOTH")
 cloth.settings.quality = 5

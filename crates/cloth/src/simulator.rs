@@ -182,6 +182,15 @@ pub struct Simulator {
     work: Work,
 }
 
+impl Work {
+    /// Positions at the substep's end for velocities `trial`: x = x₀ + h v.
+    fn place_at_trial(&mut self, h: f64) {
+        for ((x, x0), v) in self.x.iter_mut().zip(&self.x0).zip(&self.trial) {
+            *x = x0 + v * h;
+        }
+    }
+}
+
 impl Simulator {
     /// A simulator with no constraints and no obstacle.
     ///
@@ -459,6 +468,7 @@ impl Simulator {
     /// matrix of the next linear solve when `with_matrix`; returns the incremental potential Φ.
     fn evaluate(&mut self, h: f64, with_matrix: bool) -> f64 {
         let env = self.environment();
+        self.work.place_at_trial(h);
         let Work {
             x0,
             v0,
@@ -468,9 +478,6 @@ impl Simulator {
             partials,
             ..
         } = &mut self.work;
-        for ((x, x0), v) in x.iter_mut().zip(x0.iter()).zip(trial.iter()) {
-            *x = x0 + v * h;
-        }
         let c = with_matrix.then_some(Coefficients {
             mass: 1.0,
             damping: h,
@@ -619,9 +626,7 @@ impl Simulator {
                 }
                 if last && !self.settings.line_search {
                     // Nothing is left to decide at the last iteration's end: no forces, no Φ.
-                    for ((x, x0), v) in w.x.iter_mut().zip(&w.x0).zip(&w.trial) {
-                        *x = x0 + v * h;
-                    }
+                    w.place_at_trial(h);
                     break;
                 }
                 // The last iteration's end needs only Φ, not another matrix.
