@@ -7,7 +7,8 @@
 //!   (M − h ∂f/∂v − h² ∂f/∂x) Δv = h (f₀ + h ∂f/∂x v₀),   v₁ = v₀ + Δv.
 //!
 //! That is exactly one Newton iteration on the residual R(v) = M (v − v₀) − h f(x₀ + h v, v)
-//! started from v = 0 (x = x₀), which is how it is computed here (CG warm-started at Δv = 0).
+//! started from v = 0 (x = x₀), which is how it is computed here, CG warm-started at the last
+//! velocity v₀ and stopped relative to the residual there (see [`Settings::cg_tolerance`]).
 //! When the solution takes free vertices into the body, they become contacts and the same
 //! system is solved again from it (up to `CONTACT_ROUNDS` times; see the `collision` module).
 //! With `newton_iterations > 1`, further iterations re-linearize at the new iterate; R is the
@@ -38,7 +39,7 @@ use crate::assemble::{Assembly, Coefficients, Environment};
 use crate::collision::{Collisions, Motion as Substep, Obstacle, Surface};
 use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
 use crate::energy::{Mat3, Vec3};
-use crate::pcg::Pcg;
+use crate::pcg::{Pcg, Stop};
 use crate::reduce::{partial_count, sum_by};
 use crate::strain_limit::{Floor, StrainLimiter};
 use crate::{ClothError, Model, StepFailure};
@@ -56,9 +57,12 @@ pub struct Settings {
     pub newton_iterations: u32,
     /// Backtracking line search on the incremental potential in each Newton iteration.
     pub line_search: bool,
-    /// Relative residual at which conjugate gradients stop (default 1e-2: the 64² drape in
-    /// contact takes about 12 iterations a substep where 1e-3 took 42; strain limiting and
-    /// the collision passes after the solve see to the figures that matter).
+    /// Conjugate gradients stop when the filtered residual is this fraction of the residual
+    /// of their warm start at the last velocity, that is of the substep's impulses h (f₀ +
+    /// h ∂f/∂x v₀ + ∂f/∂v v₀), not of the whole right-hand side with its momentum M v₀: so
+    /// every substep applies its forces to the same relative accuracy however many substeps
+    /// a frame there are. Default 1e-2: strain limiting and the collision passes after the
+    /// solve see to the figures that matter.
     pub cg_tolerance: f64,
     /// Conjugate-gradient iterations before a solve counts as failed.
     pub cg_max_iterations: u32,
@@ -513,6 +517,7 @@ impl Simulator {
         &mut self,
         t1: f64,
         h: f64,
+        reference: f64,
         report: &mut StepReport,
     ) -> Result<(), StepFailure> {
         for _ in 0..CONTACT_ROUNDS {
@@ -536,7 +541,7 @@ impl Simulator {
             for (i, d) in w.delta.iter_mut().enumerate() {
                 *d = f.s[i] * *d + (Mat3::identity() - f.s[i]) * (f.z[i] - w.v[i]);
             }
-            self.solve(report, true)?;
+            self.solve(report, Some(reference))?;
         }
         Ok(())
     }
@@ -554,22 +559,32 @@ impl Simulator {
         );
     }
 
-    /// Solves the filtered system for `work.delta`, from its value; `again` when the matrix
-    /// is the last solve's, with more contacts.
-    fn solve(&mut self, report: &mut StepReport, again: bool) -> Result<(), StepFailure> {
+    /// Solves the filtered system for `work.delta`, from its value, and returns the norm its
+    /// tolerance was relative to. A re-solve with more contacts (the matrix is the last
+    /// solve's) passes that solve's `reference`, so it stops at the same accuracy rather than
+    /// a fraction of what the new contacts disturbed.
+    fn solve(
+        &mut self,
+        report: &mut StepReport,
+        reference: Option<f64>,
+    ) -> Result<f64, StepFailure> {
         let w = &mut self.work;
-        self.pcg.prepare(&self.assembly.matrix, &w.filter.s, again);
+        self.pcg
+            .prepare(&self.assembly.matrix, &w.filter.s, reference.is_some());
         let solve = self.pcg.solve(
             &self.assembly.matrix,
             &w.filter.s,
             &w.rhs,
             &mut w.delta,
-            self.settings.cg_tolerance,
-            self.settings.cg_max_iterations,
+            Stop {
+                tolerance: self.settings.cg_tolerance,
+                reference,
+                max_iterations: self.settings.cg_max_iterations,
+            },
         );
         report.cg_iterations += solve.iterations;
         if solve.converged {
-            Ok(())
+            Ok(solve.reference)
         } else {
             Err(StepFailure::SolverDiverged)
         }
@@ -605,8 +620,8 @@ impl Simulator {
                 };
             }
             report.newton_iterations += 1;
-            self.solve(report, false)?;
-            self.add_missed_contacts(t1, h, report)?;
+            let reference = self.solve(report, None)?;
+            self.add_missed_contacts(t1, h, reference, report)?;
             let last = iteration + 1 == self.settings.newton_iterations;
             if last {
                 // The contact impulses of the solve, b − A Δv, for friction.

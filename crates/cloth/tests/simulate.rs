@@ -277,3 +277,70 @@ fn an_impossible_solve_is_a_typed_error_not_nan() {
         Err(ClothError::BadValue { .. })
     ));
 }
+
+/// A 10 cm sheet of 5 × 5 vertices with `material`, no pins, no body, falling for `seconds`
+/// at 24 fps in `substeps` implicit steps a frame; returns the mean drop and the mean
+/// vertical velocity at the end.
+fn fall(material: &Material, substeps: u32, seconds: f64) -> (f64, f64) {
+    let model = Model::new(&sheet(5, 5, 0.1, 0.1), material).unwrap();
+    let settings = Settings {
+        max_substep: FRAME / f64::from(substeps),
+        ..Settings::default()
+    };
+    let mut sim = Simulator::new(model, settings).unwrap();
+    let mut state = State::at_rest(sim.model());
+    let frames = (seconds / FRAME).round() as u32;
+    for _ in 0..frames {
+        sim.step(&mut state, FRAME).unwrap();
+    }
+    let n = state.positions.len() as f64;
+    let drop = -state.positions.iter().map(|p| p.y).sum::<f64>() / n;
+    let speed = -state.velocities.iter().map(|v| v.y).sum::<f64>() / n;
+    (drop, speed)
+}
+
+/// Backward Euler's own drop under constant gravity g after `steps` steps of `h` from rest,
+/// the scalar recurrence v += h g, y += h v (not the continuous g t²/2: the test asks that the
+/// solve applies every substep's force, not that the integrator is exact).
+fn backward_euler_drop(g: f64, h: f64, steps: u32) -> f64 {
+    let (mut v, mut y) = (0.0, 0.0);
+    for _ in 0..steps {
+        v += h * g;
+        y += h * v;
+    }
+    y
+}
+
+#[test]
+fn free_fall_applies_gravity_at_every_substep_count() {
+    let still = Material {
+        drag: 0.0,
+        ..Material::COTTON
+    };
+    for substeps in [1, 2, 5, 20, 50] {
+        let (drop, _) = fall(&still, substeps, 1.0);
+        let h = FRAME / f64::from(substeps);
+        let exact = backward_euler_drop(9.81, h, 24 * substeps);
+        assert!(
+            (drop / exact - 1.0).abs() < 5e-3,
+            "{substeps} substeps a frame: fell {drop} m, backward Euler {exact} m"
+        );
+    }
+}
+
+#[test]
+fn linear_drag_gives_the_terminal_velocity() {
+    // Leather's weight under a drag that makes the time constant ρ / drag half a second.
+    let material = Material {
+        drag: 1.8,
+        ..Material::LEATHER
+    };
+    let terminal = material.density * 9.81 / material.drag;
+    for substeps in [2, 5, 20, 50] {
+        let (_, speed) = fall(&material, substeps, 5.0);
+        assert!(
+            (speed / terminal - 1.0).abs() < 5e-3,
+            "{substeps} substeps a frame: {speed} m/s, terminal {terminal} m/s"
+        );
+    }
+}
