@@ -47,6 +47,18 @@ pub(crate) struct Coefficients {
     pub stiffness: f64,
 }
 
+impl Coefficients {
+    /// The matrix of an implicit step whose positions move by `h` times the new velocity:
+    /// M − h ∂f/∂v − h² ∂f/∂x.
+    pub fn implicit(h: f64) -> Self {
+        Self {
+            mass: 1.0,
+            damping: h,
+            stiffness: h * h,
+        }
+    }
+}
+
 /// The world around the cloth.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Environment {

@@ -11,9 +11,12 @@
 //! - **Aggregates** (the greedy rule of Vaněk, Mandel & Brezina 1996, phases 1 and 2): in index
 //!   order, a particle whose strongly coupled neighbours are all unassigned forms an aggregate
 //!   with them; each particle left over joins the aggregate of its first assigned strong
-//!   neighbour. Strength is read off the first matrix solved (built at the first update), so
-//!   the bending springs' weak couplings across two edges do not make aggregates too large
-//!   for the piecewise-constant prolongation. Each aggregate is a node of the next level,
+//!   neighbour. Strength is read off the matrix the hierarchy is made with (the simulator's,
+//!   at the rest shape and the longest substep), so the bending springs' weak couplings
+//!   across two edges do not make aggregates too large for the piecewise-constant
+//!   prolongation. It is a function of the model and the settings alone, never of the state
+//!   when a run started, so a run resumed from a checkpoint preconditions, and so iterates,
+//!   exactly as the run it continues. Each aggregate is a node of the next level,
 //!   which is coarsened the same way until a level has at most [`COARSEST`] nodes.
 //! - **Coarse matrices**, per solve: with the piecewise-constant prolongation P (a coarse node's
 //!   3-vector copied to every particle of its aggregate), the Galerkin product Pᵀ A P is the sum
@@ -111,8 +114,6 @@ pub(crate) struct Multigrid {
     last_filter: Vec<Mat3>,
     /// Dense Cholesky factor of the coarsest level, when it is small and positive definite.
     coarsest: Option<Cholesky<f64, Dyn>>,
-    /// Whether `levels` have been built (at the first update).
-    built: bool,
 }
 
 /// The aggregate of each node of `a`, and the number of aggregates, through the strong
@@ -305,22 +306,23 @@ fn prolong(x: &mut [Vec3], coarse: &Level) {
 }
 
 impl Multigrid {
-    /// Buffers for `n` particles; the hierarchy is built at the first [`Self::update`], from
-    /// the couplings of that first matrix.
-    pub fn new(n: usize) -> Self {
-        Self {
+    /// The hierarchy for matrices of `a`'s pattern, its aggregates following `a`'s strong
+    /// couplings, and the buffers of its cycle; [`Self::update`] gives it values.
+    pub fn new<T: Precision>(a: &BlockMatrix<T>) -> Self {
+        let n = a.size();
+        let mut multigrid = Self {
             levels: Vec::new(),
-            built: false,
             free: vec![true; n],
             inverse_diagonal: vec![Mat3::identity(); n],
             last_filter: vec![Mat3::identity(); n],
             coarsest: None,
-        }
+        };
+        multigrid.build(a);
+        multigrid
     }
 
     /// The levels below `fine`, down to [`COARSEST`] nodes.
-    fn build(&mut self, fine: &BlockMatrix<f32>) {
-        self.levels.clear();
+    fn build<T: Precision>(&mut self, fine: &BlockMatrix<T>) {
         let coarser = |above: usize, make: &dyn Fn() -> Level| {
             (above > COARSEST)
                 .then(make)
@@ -332,7 +334,6 @@ impl Multigrid {
             next = coarser(above.size(), &|| Level::new(above));
             self.levels.push(level);
         }
-        self.built = true;
     }
 
     /// The coarse matrices, diagonal inverses and coarsest factor for the fine matrix `a`
@@ -343,9 +344,6 @@ impl Multigrid {
     /// what it restricts and prolongs), so a re-solve of the same matrix with a few more
     /// contacts need not gather the coarse matrices again.
     pub fn update(&mut self, a: &BlockMatrix<f32>, filter: &[Mat3], coarse: bool) {
-        if !self.built {
-            self.build(a);
-        }
         let identity = Mat3::identity();
         for (free, s) in self.free.iter_mut().zip(filter) {
             *free = *s == identity;
@@ -508,7 +506,7 @@ mod tests {
             "{count} aggregates of {}",
             parent.len()
         );
-        let mut mg = Multigrid::new(a.size());
+        let mut mg = Multigrid::new(&a);
         mg.update(&a, &vec![Mat3::identity(); a.size()], true);
         let sizes: Vec<usize> = mg.levels.iter().map(|l| l.x.len()).collect();
         assert!(sizes.windows(2).all(|w| w[1] < w[0]), "sizes {sizes:?}");
@@ -546,7 +544,7 @@ mod tests {
                 Mat3::identity() - normal * normal.transpose()
             };
         }
-        let mut mg = Multigrid::new(n);
+        let mut mg = Multigrid::new(&a);
         mg.update(&a, &filter, true);
         // z = M r as conjugate gradients makes it, and its r · z.
         let mut apply = |r: &[Vec3]| -> (Vec<Vec3>, f64) {

@@ -75,16 +75,17 @@ fn chunked<T: Send>(
 }
 
 impl Pcg {
-    /// Buffers and hierarchy for systems with the pattern of `pattern` (its values unused).
+    /// Buffers and hierarchy for systems with the pattern of `a`, the multigrid's aggregates
+    /// following `a`'s strong couplings.
     #[must_use]
-    pub fn new(pattern: &BlockMatrix<f32>) -> Self {
-        let n = pattern.size();
+    pub fn new(a: &BlockMatrix<f32>) -> Self {
+        let n = a.size();
         Self {
             r: vec![Vec3::zeros(); n],
             p: vec![Vec3::zeros(); n],
             q: vec![Vec3::zeros(); n],
             z: vec![Vec3::zeros(); n],
-            multigrid: Multigrid::new(n),
+            multigrid: Multigrid::new(a),
             partials: vec![[0.0; 2]; partial_count(n)],
         }
     }

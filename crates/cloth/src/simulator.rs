@@ -108,6 +108,16 @@ impl Default for Settings {
     }
 }
 
+impl Settings {
+    /// The world the cloth moves in.
+    fn environment(&self) -> Environment {
+        Environment {
+            gravity: self.gravity,
+            wind: self.wind,
+        }
+    }
+}
+
 /// Positions and velocities of the particles at a time.
 #[derive(Clone, Debug, PartialEq)]
 pub struct State {
@@ -230,7 +240,19 @@ impl Simulator {
             }
         }
         let n = model.vertex_count();
-        let assembly = Assembly::new(&model);
+        let mut assembly = Assembly::new(&model);
+        // The preconditioner's aggregates follow the matrix of the rest shape at the longest
+        // substep: a function of the model and the settings, so a resumed run makes the same.
+        let rest = model.rest_positions();
+        assembly.evaluate(
+            &model,
+            rest,
+            rest,
+            &vec![Vec3::zeros(); n],
+            &settings.environment(),
+            Some(Coefficients::implicit(settings.max_substep)),
+            settings.project_hessians,
+        );
         Ok(Self {
             collisions: Collisions::new(&model)?,
             strain_limiter: StrainLimiter::new(&model.springs, n),
@@ -391,13 +413,6 @@ impl Simulator {
         }
     }
 
-    fn environment(&self) -> Environment {
-        Environment {
-            gravity: self.settings.gravity,
-            wind: self.settings.wind,
-        }
-    }
-
     fn check_state(&self, state: &State, dt: f64) -> Result<u32, ClothError> {
         let n = self.model.vertex_count();
         for (what, given) in [
@@ -471,7 +486,7 @@ impl Simulator {
     /// Evaluates at velocities `work.trial`: positions, forces, the right-hand side −R, the
     /// matrix of the next linear solve when `with_matrix`; returns the incremental potential Φ.
     fn evaluate(&mut self, h: f64, with_matrix: bool) -> f64 {
-        let env = self.environment();
+        let env = self.settings.environment();
         self.work.place_at_trial(h);
         let Work {
             x0,
@@ -482,11 +497,7 @@ impl Simulator {
             partials,
             ..
         } = &mut self.work;
-        let c = with_matrix.then_some(Coefficients {
-            mass: 1.0,
-            damping: h,
-            stiffness: h * h,
-        });
+        let c = with_matrix.then_some(Coefficients::implicit(h));
         let totals = self.assembly.evaluate(
             &self.model,
             x,
@@ -729,7 +740,7 @@ impl Simulator {
     ) -> Result<StepReport, ClothError> {
         let count = self.check_state(state, dt)?;
         let h = dt / f64::from(count);
-        let env = self.environment();
+        let env = self.settings.environment();
         let mut report = StepReport::default();
         for _ in 0..count {
             let t1 = state.time + h;
@@ -775,7 +786,7 @@ impl Simulator {
 
     /// Kinetic + elastic + gravitational energy of `state`, J.
     pub fn energy(&mut self, state: &State) -> f64 {
-        let env = self.environment();
+        let env = self.settings.environment();
         let x = &state.positions;
         let totals =
             self.assembly
