@@ -4,22 +4,32 @@
 //! to `tailor_checkpoint.bin` in the output directory: positions, velocities and the time
 //! (the `f64` the solver accumulates, so later substeps land on the same instants), the
 //! contacts carried into the next step ([`tailor_cloth::Simulator::carried_contacts`]), the
-//! frame number, and the per-frame figures of the summary so far. Nothing else carries over a
-//! frame boundary: attachment targets are recomputed from the body at every frame, the
-//! conjugate-gradient solve starts from zero each substep, and the collision hierarchies are
-//! refit from positions. So a resumed run computes the same bits as an uninterrupted one.
+//! frame number, and the per-frame figures of the summary so far.
+//!
+//! That is all the state, because everything else a step reads is a function of the scene
+//! or is rebuilt within the step: attachment targets and the body's motion are recomputed
+//! from the body frames at every frame; the conjugate-gradient solve of each substep starts
+//! from the substep's own velocities; the multigrid's aggregates are read off the matrix of
+//! the rest shape when the simulator is made; contact sets, impact zones and the strain
+//! limiter's order are made afresh in each substep; the collision hierarchies are built from
+//! the rest shapes and refit from positions. So a resumed run computes the same bits as an
+//! uninterrupted one (`tests/shipped_shots.rs` kills the shipped scenes at several frames and
+//! compares every file).
 //!
 //! The format is little-endian binary, every `f64` stored as its exact bits:
 //!
 //! ```text
-//! "TAILORCK"  u32 version  u64 scene fingerprint  u32 frame  f64 time  u32 vertices
+//! "TAILORCK"  u32 version
+//! u32 keys  keys × (u32 length, UTF-8 name, u64 hash)        the scene's fingerprint
+//! u32 frame  f64 time  u32 vertices
 //! vertices × (3 f64 position)  vertices × (3 f64 velocity)  vertices × (u8 carried contact)
 //! u32 rows  rows × (u32 frame, f64 ms, f64 strain, u32 substeps, u32 cg, u64 penetrating,
 //!                   f64 deepest, u64 self-intersecting pairs)
 //! ```
 //!
-//! The fingerprint ([`crate::scene::Scene::fingerprint`]) refuses a checkpoint of another
-//! scene, garment or body.
+//! The fingerprint ([`crate::scene::Fingerprint`]) refuses a checkpoint of another scene,
+//! garment or body, naming the first key that changed; `[scene] frames` may change, so a
+//! finished shot can be extended.
 
 use std::fs;
 use std::io::{self, Write};
@@ -32,9 +42,10 @@ use tailor_subdiv::Point;
 
 use crate::check::Findings;
 use crate::output::write_atomically;
+use crate::scene::Fingerprint;
 
 const MAGIC: &[u8; 8] = b"TAILORCK";
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 
 /// The checkpoint file in an output directory.
 #[must_use]
@@ -63,7 +74,7 @@ pub struct FrameStats {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Checkpoint {
     /// The scene's fingerprint.
-    pub fingerprint: u64,
+    pub fingerprint: Fingerprint,
     /// The last frame completed.
     pub frame: u32,
     /// Positions, velocities and time after it.
@@ -86,7 +97,12 @@ fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {
     let count = |n: usize| u32::try_from(n).map_err(io::Error::other);
     w.write_all(MAGIC)?;
     w.write_all(&VERSION.to_le_bytes())?;
-    w.write_all(&c.fingerprint.to_le_bytes())?;
+    w.write_all(&count(c.fingerprint.0.len())?.to_le_bytes())?;
+    for (name, hash) in &c.fingerprint.0 {
+        w.write_all(&count(name.len())?.to_le_bytes())?;
+        w.write_all(name.as_bytes())?;
+        w.write_all(&hash.to_le_bytes())?;
+    }
     w.write_all(&c.frame.to_le_bytes())?;
     w.write_all(&c.state.time.to_le_bytes())?;
     w.write_all(&count(c.state.positions.len())?.to_le_bytes())?;
@@ -115,8 +131,9 @@ fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {
 /// `fingerprint` and a garment of `vertices` vertices.
 ///
 /// # Errors
-/// An unreadable, truncated or foreign checkpoint, naming the file.
-pub fn load(dir: &Path, fingerprint: u64, vertices: usize) -> Result<Option<Checkpoint>> {
+/// An unreadable, truncated or foreign checkpoint, naming the file (and for a foreign one
+/// the first scene key that differs).
+pub fn load(dir: &Path, fingerprint: &Fingerprint, vertices: usize) -> Result<Option<Checkpoint>> {
     let file = path(dir);
     let bytes = match fs::read(&file) {
         Ok(bytes) => bytes,
@@ -124,10 +141,10 @@ pub fn load(dir: &Path, fingerprint: u64, vertices: usize) -> Result<Option<Chec
         Err(e) => return Err(e).with_context(|| format!("reading {}", file.display())),
     };
     let c = decode(&bytes).with_context(|| format!("reading {}", file.display()))?;
-    if c.fingerprint != fingerprint {
+    if let Some(key) = c.fingerprint.first_difference(fingerprint) {
         bail!(
-            "{} was written for another scene (or its garment or body changed); \
-             run without --resume to start over",
+            "{} was written for another shot ({key} differs); only [scene] frames may \
+             change between a run and its resumption; run without --resume to start over",
             file.display()
         );
     }
@@ -183,7 +200,20 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
     if version != VERSION {
         bail!("checkpoint version {version}; this tailor reads version {VERSION}");
     }
-    let fingerprint = r.u64()?;
+    let keys = r.u32()?;
+    let fingerprint = Fingerprint(
+        (0..keys)
+            .map(|_| {
+                let length = r.u32()? as usize;
+                let Some((name, rest)) = r.0.split_at_checked(length) else {
+                    bail!("the file is truncated");
+                };
+                r.0 = rest;
+                let name = String::from_utf8(name.to_vec())?;
+                Ok((name, r.u64()?))
+            })
+            .collect::<Result<_>>()?,
+    );
     let frame = r.u32()?;
     let time = r.f64()?;
     let n = r.u32()? as usize;
@@ -238,7 +268,10 @@ mod tests {
     #[test]
     fn round_trips_exact_bits_and_rejects_damage() {
         let c = Checkpoint {
-            fingerprint: 0x1234_5678_9abc_def0,
+            fingerprint: Fingerprint(vec![
+                ("[cloth] friction".to_owned(), 0x1234_5678_9abc_def0),
+                ("[scene] fps".to_owned(), 7),
+            ]),
             frame: 7,
             state: State {
                 positions: vec![Point::new(0.1, -2.5e-300, 1.0 / 3.0); 2],

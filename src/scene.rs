@@ -202,9 +202,64 @@ pub struct Scene {
     pub body: Option<Body>,
     /// What to write.
     pub output: Output,
-    /// A hash of everything that determines the simulation (scene text, garment, first body
-    /// frame), stored in checkpoints so a resume cannot continue a different shot.
-    pub fingerprint: u64,
+    /// What determines the simulation, key by key, stored in checkpoints so a resume cannot
+    /// continue a different shot.
+    pub fingerprint: Fingerprint,
+}
+
+/// What determines a shot, key by key: a hash of each scene key's value, of the garment file
+/// and of the body's first frame. `[scene] frames` is left out, so that a resumed run may
+/// extend a shot: frames are simulated one after another, and frame 40 of a 60-frame run is
+/// frame 40 of a 40-frame one. A key given with its default value counts as changed from the
+/// key left out, which errs on the side of refusing.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Fingerprint(pub Vec<(String, u64)>);
+
+impl Fingerprint {
+    /// The entries of the scene `table` (its text parsed), then `files` (name and bytes).
+    fn new(table: &toml::Table, files: &[(&str, &[u8])]) -> Self {
+        let mut entries = Vec::new();
+        for (section, value) in table {
+            let keys: Vec<(String, &toml::Value)> = match value.as_table() {
+                Some(keys) => keys
+                    .iter()
+                    .map(|(key, value)| (format!("[{section}] {key}"), value))
+                    .collect(),
+                None => vec![(section.clone(), value)],
+            };
+            for (name, value) in keys {
+                if name != "[scene] frames" {
+                    entries.push((name, Fnv::hash(value.to_string().as_bytes())));
+                }
+            }
+        }
+        for (name, bytes) in files {
+            entries.push(((*name).to_owned(), Fnv::hash(bytes)));
+        }
+        entries.sort();
+        Self(entries)
+    }
+
+    /// The first entry, by name, that `self` and `other` do not share with the same hash.
+    #[must_use]
+    pub fn first_difference<'a>(&'a self, other: &'a Self) -> Option<&'a str> {
+        let (mut a, mut b) = (self.0.iter().peekable(), other.0.iter().peekable());
+        loop {
+            match (a.peek(), b.peek()) {
+                (None, None) => return None,
+                (Some((x, _)), None) | (None, Some((x, _))) => return Some(x),
+                (Some((x, hx)), Some((y, hy))) => match x.cmp(y) {
+                    std::cmp::Ordering::Less => return Some(x),
+                    std::cmp::Ordering::Greater => return Some(y),
+                    std::cmp::Ordering::Equal if hx != hy => return Some(x),
+                    std::cmp::Ordering::Equal => {
+                        a.next();
+                        b.next();
+                    }
+                },
+            }
+        }
+    }
 }
 
 /// The garment and its fabric.
@@ -311,13 +366,16 @@ pub fn load(path: &Path, last_frame: Option<u32>) -> Result<Scene> {
             bail!("{}: {level} is deeper than {MAX_LEVEL}", at(key));
         }
     }
-    let mut hash = Fnv::new();
-    hash.bytes(text.as_bytes());
-    hash.bytes(&fs::read(&cloth.path).with_context(|| at("[cloth] mesh"))?);
-    for p in body.iter().flat_map(|b| &b.frames[0]) {
-        for c in p.iter() {
-            hash.bytes(&c.to_le_bytes());
-        }
+    let table: toml::Table = text.parse().map_err(|e| anyhow!("{name}: {e}"))?;
+    let garment = fs::read(&cloth.path).with_context(|| at("[cloth] mesh"))?;
+    let mut files = vec![("[cloth] mesh (the file)", garment.as_slice())];
+    let first_body: Vec<u8> = body
+        .iter()
+        .flat_map(|b| &b.frames[0])
+        .flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes()))
+        .collect();
+    if body.is_some() {
+        files.push(("[body] mesh (the first frame)", first_body.as_slice()));
     }
     Ok(Scene {
         path: path.to_path_buf(),
@@ -334,7 +392,7 @@ pub fn load(path: &Path, last_frame: Option<u32>) -> Result<Scene> {
             limit_normals: out.limit_normals,
             body: out.body,
         },
-        fingerprint: hash.0,
+        fingerprint: Fingerprint::new(&table, &files),
     })
 }
 
@@ -549,5 +607,11 @@ impl Fnv {
         for &b in bytes {
             self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
         }
+    }
+
+    fn hash(bytes: &[u8]) -> u64 {
+        let mut hash = Self::new();
+        hash.bytes(bytes);
+        hash.0
     }
 }

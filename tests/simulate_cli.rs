@@ -6,7 +6,8 @@
 //!   `TAILOR_BLESS=1 cargo test --test simulate_cli`, and say why in the commit.
 //! - The bytes do not depend on the thread count.
 //! - A run stopped after a frame, or killed midway, and resumed writes the same bytes as one
-//!   uninterrupted run.
+//!   uninterrupted run; a finished shot resumed with more `frames` equals the longer shot;
+//!   a resume with any other change to the shot is refused, naming the key.
 //! - Each bad input is refused before anything is written, with a message naming the file and
 //!   the key or line, and leaves an earlier run's output untouched.
 
@@ -252,11 +253,72 @@ fn stopped_and_resumed_run_writes_the_same_bytes() {
     for (name, bytes) in &a {
         assert!(bytes == &b[name], "{name} differs after resuming");
     }
-    // A checkpoint of another scene is refused.
-    shot(&dir, &[("density = 0.2", "density = 0.3")]);
+    // A checkpoint of another shot is refused, naming the key that changed.
+    for (from, to, key) in [
+        ("density = 0.2", "density = 0.3", "[cloth] density"),
+        ("substeps = 4", "substeps = 5", "[scene] substeps"),
+        (
+            "subdivision_level = 1\n\n[output]",
+            "\n[output]",
+            "[body] subdivision_level",
+        ),
+    ] {
+        shot(&dir, &[(from, to)]);
+        let out = tailor(&[scene, "--out", parts_s, "--resume"]);
+        assert_eq!(out.status.code(), Some(1));
+        let error = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            error.contains(&format!("another shot ({key} differs)")),
+            "{error}"
+        );
+    }
+    shot(&dir, &[]);
+    fs::write(
+        dir.join("sheet.obj"),
+        sheet().replacen("v 0.1 1.1", "v 0.11 1.1", 1),
+    )
+    .unwrap();
     let out = tailor(&[scene, "--out", parts_s, "--resume"]);
+    let error = String::from_utf8_lossy(&out.stderr);
+    assert!(error.contains("[cloth] mesh (the file) differs"), "{error}");
+}
+
+#[test]
+fn a_finished_shot_extended_by_resuming_equals_the_longer_shot() {
+    let dir = scratch("extend");
+    let long = shot(&dir, &[("frames = 10", "frames = 16")]);
+    let whole = dir.join("whole");
+    run_ok(&[
+        long.to_str().unwrap(),
+        "--out",
+        whole.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let short = shot(&dir, &[]);
+    let parts = dir.join("parts");
+    let (short, parts_s) = (short.to_str().unwrap(), parts.to_str().unwrap());
+    run_ok(&[short, "--out", parts_s, "--quiet"]);
+    assert!(parts.join("summary.json").exists() && !parts.join("cloth_0011.obj").exists());
+    shot(&dir, &[("frames = 10", "frames = 16")]);
+    run_ok(&[short, "--out", parts_s, "--resume", "--quiet"]);
+    let (a, b) = (objs(&whole), objs(&parts));
+    assert_eq!(a.len(), 3 * 17);
+    assert_eq!(a.len(), b.len());
+    for (name, bytes) in &a {
+        assert!(bytes == &b[name], "{name} differs in the extended shot");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_slice(&fs::read(parts.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["total"]["frames_simulated"], 16);
+    // A shot cannot be shortened past its checkpoint.
+    shot(&dir, &[("frames = 10", "frames = 12")]);
+    let out = tailor(&[short, "--out", parts_s, "--resume"]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("another scene"));
+    let error = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        error.contains("at frame 16, past the last frame asked (12)"),
+        "{error}"
+    );
 }
 
 #[test]

@@ -66,7 +66,9 @@ pub struct Args {
     /// Worker threads (default: one per core). The output is the same for any count.
     #[arg(long, value_name = "N")]
     pub threads: Option<NonZeroUsize>,
-    /// Continue from the checkpoint in the output directory (from the start if there is none).
+    /// Continue from the checkpoint in the output directory (from the start if there is
+    /// none), with the same bytes as an uninterrupted run. The scene may have more `frames`
+    /// (to extend a finished shot); any other change is refused, naming the key.
     #[arg(long)]
     pub resume: bool,
     /// No progress bar or notes on standard error.
@@ -146,7 +148,7 @@ fn simulate(args: &Args) -> Result<PathBuf> {
     let mut shot = Shot::new(&scene)?;
     let vertex_count = scene.cloth.doc.mesh.vertex_count();
     let resumed = if args.resume {
-        checkpoint::load(&dir, scene.fingerprint, vertex_count)?
+        checkpoint::load(&dir, &scene.fingerprint, vertex_count)?
     } else {
         None
     };
@@ -164,6 +166,14 @@ fn simulate(args: &Args) -> Result<PathBuf> {
         }
         None => (State::at_rest(shot.simulator.model()), Vec::new(), 0),
     };
+    if next > last + 1 {
+        bail!(
+            "the checkpoint in {} is at frame {}, past the last frame asked ({last}); \
+             raise [scene] frames or run without --resume",
+            dir.display(),
+            next - 1
+        );
+    }
     fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     if next > 0 {
         shot.pose_body(next - 1)?;
@@ -191,7 +201,7 @@ fn simulate(args: &Args) -> Result<PathBuf> {
         checkpoint::save(
             &dir,
             &Checkpoint {
-                fingerprint: scene.fingerprint,
+                fingerprint: scene.fingerprint.clone(),
                 frame,
                 state: state.clone(),
                 carried_contacts: shot.simulator.carried_contacts().to_vec(),
