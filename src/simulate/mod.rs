@@ -341,7 +341,8 @@ impl<'a> Shot<'a> {
 
     /// Evaluates the frame's surface and the figures of `tailor check`'s test.
     fn finish(&mut self, state: &State, row: &mut FrameStats) -> Result<()> {
-        row.max_strain = self.simulator.model().max_strain(&state.positions);
+        let worst = self.simulator.model().worst_edge(&state.positions);
+        (row.strained_edge, row.max_strain) = worst.unwrap_or_default();
         if row.max_strain.is_nan() || row.max_strain > MAX_STRAIN {
             bail!(
                 "frame {}: the simulation diverged (an edge stretched to {:.0}% strain); \

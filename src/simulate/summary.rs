@@ -56,6 +56,7 @@ pub fn report(scene: &Path, dir: &Path, thickness: f64, stats: &[FrameStats]) ->
             row["frame"] = json!(s.frame);
             row["ms"] = json!(s.ms);
             row["max_strain"] = json!(s.max_strain);
+            row["strained_edge"] = json!(s.strained_edge);
             row["substeps"] = json!(s.substeps);
             row["cg_iterations"] = json!(s.cg_iterations);
             row
