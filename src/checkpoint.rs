@@ -23,8 +23,8 @@
 //! u32 keys  keys × (u32 length, UTF-8 name, u64 hash)        the scene's fingerprint
 //! u32 frame  f64 time  u32 vertices
 //! vertices × (3 f64 position)  vertices × (3 f64 velocity)  vertices × (u8 carried contact)
-//! u32 rows  rows × (u32 frame, f64 ms, f64 strain, u32 substeps, u32 cg, u64 penetrating,
-//!                   f64 deepest, u64 self-intersecting pairs)
+//! u32 rows  rows × (u32 frame, f64 ms, f64 strain, 2 u32 strained edge, u32 substeps, u32 cg,
+//!                   u64 penetrating, f64 deepest, u64 self-intersecting pairs)
 //! ```
 //!
 //! The fingerprint ([`crate::scene::Fingerprint`]) refuses a checkpoint of another scene,
@@ -62,6 +62,8 @@ pub struct FrameStats {
     pub ms: f64,
     /// Largest |l/L − 1| over the control mesh's edges at the end of the frame.
     pub max_strain: f64,
+    /// The control vertices of the edge with that strain, to say where a limit was passed.
+    pub strained_edge: [u32; 2],
     /// Substeps taken, counting halved retries.
     pub substeps: u32,
     /// Conjugate-gradient iterations.
@@ -118,6 +120,9 @@ fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {
         w.write_all(&s.frame.to_le_bytes())?;
         w.write_all(&s.ms.to_le_bytes())?;
         w.write_all(&s.max_strain.to_le_bytes())?;
+        for v in s.strained_edge {
+            w.write_all(&v.to_le_bytes())?;
+        }
         w.write_all(&s.substeps.to_le_bytes())?;
         w.write_all(&s.cg_iterations.to_le_bytes())?;
         w.write_all(&(f.penetrating_vertices as u64).to_le_bytes())?;
@@ -235,6 +240,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
                 frame: r.u32()?,
                 ms: r.f64()?,
                 max_strain: r.f64()?,
+                strained_edge: [r.u32()?, r.u32()?],
                 substeps: r.u32()?,
                 cg_iterations: r.u32()?,
                 findings: Findings {
@@ -283,6 +289,7 @@ mod tests {
                 frame: 7,
                 ms: 12.5,
                 max_strain: 0.03,
+                strained_edge: [4, 1],
                 substeps: 5,
                 cg_iterations: 40,
                 findings: Findings {

@@ -118,8 +118,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         threads: None,
         resume: false,
         quiet: args.quiet,
+        strict: false,
         stop_after: None,
-    })?;
+    })?
+    .dir;
     let picture = dir.join("preview.png");
     let preview = PreviewCli::try_parse_from([
         "preview".as_ref(),

@@ -2,7 +2,7 @@
 //!
 //! A scene names the garment (a Catmull-Clark control mesh with groups), its fabric, which
 //! vertices are pinned or attached to the body, the body (an OBJ sequence, `body_####.obj`, or
-//! one static OBJ) and what to write. `assets/scenes/cape.toml` is the annotated example; every
+//! one static OBJ), what to write, and whether a frame failing its quality fails the run. `assets/scenes/cape.toml` is the annotated example; every
 //! key and its default is documented on the structs below. Paths are relative to the scene
 //! file. Unknown keys are errors (a misspelt `thicknes` must not silently fall back to the
 //! default).
@@ -38,7 +38,7 @@ struct SceneFile {
     output: OutputSection,
 }
 
-/// `[scene]`: time.
+/// `[scene]`: time, and how strict the run is.
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields, default)]
 struct SceneSection {
@@ -50,6 +50,8 @@ struct SceneSection {
     substeps: u32,
     /// m/s².
     gravity: [f64; 3],
+    /// Exit with status 3 when a frame fails its quality, as `--strict` does.
+    strict: bool,
 }
 
 impl Default for SceneSection {
@@ -59,6 +61,7 @@ impl Default for SceneSection {
             frames: 60,
             substeps: 5,
             gravity: [0.0, -9.81, 0.0],
+            strict: false,
         }
     }
 }
@@ -196,6 +199,9 @@ pub struct Scene {
     pub substeps: u32,
     /// m/s².
     pub gravity: Vector3<f64>,
+    /// Whether a frame failing its quality (strain, penetration, self-intersection) makes
+    /// the run exit with status 3 once everything is written.
+    pub strict: bool,
     /// The garment.
     pub cloth: Cloth,
     /// The body, if any.
@@ -383,6 +389,7 @@ pub fn load(path: &Path, last_frame: Option<u32>) -> Result<Scene> {
         frames: scene.frames,
         substeps: scene.substeps,
         gravity: Vector3::from(scene.gravity),
+        strict: scene.strict,
         cloth,
         body,
         output: Output {

@@ -10,6 +10,9 @@
 //!   a resume with any other change to the shot is refused, naming the key.
 //! - Each bad input is refused before anything is written, with a message naming the file and
 //!   the key or line, and leaves an earlier run's output untouched.
+//! - A shot whose cloth is torn past its strain limit says so (a warning naming the frames and
+//!   the group, `failures` in `summary.json`) and, with `--strict` or `[scene] strict = true`,
+//!   exits 3 once every file is written; a clean shot warns of nothing and passes `--strict`.
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -464,4 +467,115 @@ fn bad_input_is_refused_before_anything_is_written() {
     let out = tailor(&[scene.to_str().unwrap(), "--frames", "5..2"]);
     assert_eq!(out.status.code(), Some(2), "a usage error");
     assert!(everything(&out_dir) == before);
+}
+
+/// The shot's cube sliding 0.3 m along x each frame (a body sequence) for `frames` frames,
+/// the sheet's attached row riding on it while its far row (vertices 30-35) is pinned: by
+/// frame 2 the rows are dragged 25% further apart than the sheet's length, which no strain
+/// limiter can hold, so the edges between them (group `sheet`, not `top`) end frames past
+/// the 10% limit. `edit` applies further replacements to the scene.
+fn dragged(dir: &Path, frames: u32, edit: Edit) -> PathBuf {
+    let seq = dir.join("seq");
+    fs::create_dir_all(&seq).unwrap();
+    for k in 0..=frames {
+        let body = cube(0.3 * f64::from(k));
+        fs::write(seq.join(format!("body_{k:04}.obj")), body).unwrap();
+    }
+    let count = format!("frames = {frames}");
+    let mut all: Vec<(&str, &str)> = vec![
+        ("frames = 10", count.as_str()),
+        ("pins = []", "pins = [30, 31, 32, 33, 34, 35]"),
+        (
+            "mesh = \"cube.obj\"",
+            "mesh = \"seq/body_####.obj\"\nfirst_frame = 0",
+        ),
+    ];
+    all.extend_from_slice(edit);
+    shot(dir, &all)
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn strained_shot_warns_and_exits_3_only_when_strict() {
+    let dir = scratch("strained");
+    let scene = dragged(&dir, 4, &[]);
+    let scene = scene.to_str().unwrap();
+    let lenient = dir.join("lenient");
+    let out = run_ok(&[scene, "--out", lenient.to_str().unwrap(), "--quiet"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let report = summary(&lenient);
+    let strain = &report["failures"]["strain"];
+    // The failing frames are exactly those whose worst edge ends past 11%.
+    let past: Vec<u64> = report["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["max_strain"].as_f64().unwrap() > 0.11)
+        .map(|f| f["frame"].as_u64().unwrap())
+        .collect();
+    assert!(!past.is_empty(), "the shot was not strained: {report}");
+    let frames: Vec<u64> = strain["frames"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no strain failure in {report}"))
+        .iter()
+        .map(|f| f.as_u64().unwrap())
+        .collect();
+    assert_eq!(frames, past);
+    assert_eq!(strain["groups"], serde_json::json!(["sheet"]));
+    assert_eq!(strain["worst"], report["total"]["max_strain"]);
+    let ranges = strain["frame_ranges"].as_str().unwrap();
+    for part in [
+        "warning: strain".to_owned(),
+        format!("in frames {ranges} ("),
+        "in group \"sheet\"".to_owned(),
+    ] {
+        assert!(stderr.contains(&part), "{part:?} not in {stderr:?}");
+    }
+
+    // Strict by flag or by the scene: the same files, then exit 3.
+    let strict = dir.join("strict");
+    let out = tailor(&[scene, "--out", strict.to_str().unwrap(), "--strict"]);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(objs(&strict).len(), 3 * 5, "every frame is written");
+    assert!(objs(&strict) == objs(&lenient));
+    assert_eq!(summary(&strict)["failures"], report["failures"]);
+    assert!(strict.join("tailor_checkpoint.bin").exists());
+    let keyed = dir.join("keyed");
+    let scene = dragged(&dir, 4, &[("substeps = 4", "substeps = 4\nstrict = true")]);
+    let scene = scene.to_str().unwrap();
+    let out = tailor(&[scene, "--out", keyed.to_str().unwrap(), "--quiet"]);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(objs(&keyed) == objs(&lenient));
+
+    // Resumed, frames 2 and 3 are judged from the checkpoint and give the same failures.
+    let parts = dir.join("parts");
+    let parts_s = parts.to_str().unwrap();
+    run_ok(&[scene, "--out", parts_s, "--stop-after", "3", "--quiet"]);
+    let out = tailor(&[scene, "--out", parts_s, "--resume", "--quiet"]);
+    assert_eq!(out.status.code(), Some(3));
+    assert_eq!(summary(&parts)["failures"], report["failures"]);
+}
+
+#[test]
+fn clean_shot_warns_of_nothing_and_passes_strict() {
+    let dir = scratch("clean");
+    let scene = shot(&dir, &[]);
+    let out = tailor(&[scene.to_str().unwrap(), "--strict"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(stderr.is_empty(), "{stderr}");
+    assert_eq!(summary(&dir.join("out"))["failures"], serde_json::json!({}));
 }

@@ -14,10 +14,17 @@
 //! simulator's retries) or stretches an edge past [`MAX_STRAIN`] stops the run with an error
 //! naming the frame; the frame is not written, so nothing non-finite reaches the disk.
 //!
+//! A run that ends is judged ([`quality`]): frames whose strain passed the scene's limit, or
+//! where `tailor check`'s test found something, are warned about on standard error and listed
+//! in `summary.json`. With `--strict` (or `[scene] strict = true`) they make the exit status 3,
+//! after every frame, the checkpoint and the summary are written, so a pipeline can stop on a
+//! bad shot and still look at it.
+//!
 //! Work runs on a rayon pool of `--threads` threads; every parallel loop in the crates reduces
 //! in a fixed order, so the bytes written do not depend on the count.
 
 mod attach;
+mod quality;
 mod summary;
 mod surface;
 
@@ -50,8 +57,13 @@ pub const MAX_STRAIN: f64 = 10.0;
     after_help = "Writes per frame cloth_control_####.obj (the simulated control mesh, \
 with UVs and groups), cloth_####.obj (its Catmull-Clark surface) and body_####.obj (the refined \
 body), frame 0 being the rest pose; then summary.json. A checkpoint (tailor_checkpoint.bin) is \
-written after every frame for --resume. Exit status: 0 done, 1 bad scene or a diverging \
-simulation, 2 bad arguments."
+written after every frame for --resume. A frame fails its quality when an edge ends it more \
+than 1 percentage point past the scene's strain_limit (a 10% limit fails above 11%; not judged \
+when the limit is 0) or tailor check's test finds a penetration or a self-intersection; each \
+failure is warned about on standard error (frames, worst value, garment group) and listed \
+under \"failures\" in summary.json. Exit status: 0 done (warnings or not), 1 bad scene or a \
+diverging simulation, 2 bad arguments, 3 with --strict or [scene] strict = true when a frame \
+failed its quality (everything is written first)."
 )]
 pub struct Args {
     /// Scene file (TOML; see assets/scenes/cape.toml).
@@ -71,9 +83,13 @@ pub struct Args {
     /// (to extend a finished shot); any other change is refused, naming the key.
     #[arg(long)]
     pub resume: bool,
-    /// No progress bar or notes on standard error.
+    /// No progress bar or notes on standard error (quality warnings are still printed).
     #[arg(short, long)]
     pub quiet: bool,
+    /// Exit with status 3 when a frame fails its quality, once everything is written (as the
+    /// scene's `[scene] strict = true`).
+    #[arg(long)]
+    pub strict: bool,
     /// Stop after writing this frame and its checkpoint, as if interrupted (for tests).
     #[arg(long, hide = true, value_name = "FRAME")]
     pub stop_after: Option<u32>,
@@ -118,19 +134,32 @@ impl FromStr for FrameRange {
     }
 }
 
-/// Runs `tailor simulate`.
+/// Runs `tailor simulate`: exit 0, or 3 when strict and a frame failed its quality.
 ///
 /// # Errors
 /// A bad scene, an unwritable output, or a diverging simulation.
 pub fn run(args: &Args) -> Result<ExitCode> {
-    run_in_pool(args).map(|_| ExitCode::SUCCESS)
+    let outcome = run_in_pool(args)?;
+    Ok(if outcome.rejected {
+        ExitCode::from(3)
+    } else {
+        ExitCode::SUCCESS
+    })
 }
 
-/// Simulates the scene on a pool of `args.threads` threads; returns the output directory.
+/// How a run that did not fail ended.
+pub struct Outcome {
+    /// The output directory.
+    pub dir: PathBuf,
+    /// A frame failed its quality and the run is strict.
+    pub rejected: bool,
+}
+
+/// Simulates the scene on a pool of `args.threads` threads.
 ///
 /// # Errors
 /// As [`run`].
-pub fn run_in_pool(args: &Args) -> Result<PathBuf> {
+pub fn run_in_pool(args: &Args) -> Result<Outcome> {
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.threads {
         pool = pool.num_threads(n.get());
@@ -139,7 +168,7 @@ pub fn run_in_pool(args: &Args) -> Result<PathBuf> {
     pool.install(|| simulate(args))
 }
 
-fn simulate(args: &Args) -> Result<PathBuf> {
+fn simulate(args: &Args) -> Result<Outcome> {
     let range = args.frames.unwrap_or_default();
     let scene = scene::load(&args.scene, range.end)?;
     let first = range.start.unwrap_or(0);
@@ -218,16 +247,34 @@ fn simulate(args: &Args) -> Result<PathBuf> {
             if !args.quiet {
                 eprintln!("stopped after frame {frame}, as asked");
             }
-            return Ok(dir);
+            return Ok(Outcome {
+                dir,
+                rejected: false,
+            });
         }
     }
     progress.finish_and_clear();
-    summary::report(&scene.path, &dir, scene.cloth.thickness, &stats)?;
+    let failures = quality::assess(&stats, scene.cloth.strain_limit, &scene.cloth.doc);
+    summary::report(&scene.path, &dir, scene.cloth.thickness, &stats, &failures)?;
     println!(
         "frames {first} to {last}: {}",
         dir.join("cloth_####.obj").display()
     );
-    Ok(dir)
+    for failure in &failures {
+        eprintln!("warning: {failure}");
+    }
+    let rejected = !failures.is_empty() && (args.strict || scene.strict);
+    if rejected {
+        eprintln!(
+            "the shot failed its quality and is strict ({}): exit status 3",
+            if args.strict {
+                "--strict"
+            } else {
+                "[scene] strict = true"
+            }
+        );
+    }
+    Ok(Outcome { dir, rejected })
 }
 
 /// A progress bar on standard error with frame, ms/frame and ETA; hidden when standard error
@@ -351,7 +398,8 @@ impl<'a> Shot<'a> {
 
     /// Evaluates the frame's surface and the figures of `tailor check`'s test.
     fn finish(&mut self, state: &State, row: &mut FrameStats) -> Result<()> {
-        row.max_strain = self.simulator.model().max_strain(&state.positions);
+        let worst = self.simulator.model().worst_edge(&state.positions);
+        (row.strained_edge, row.max_strain) = worst.unwrap_or_default();
         if row.max_strain.is_nan() || row.max_strain > MAX_STRAIN {
             bail!(
                 "frame {}: the simulation diverged (an edge stretched to {:.0}% strain); \

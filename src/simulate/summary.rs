@@ -1,6 +1,7 @@
 //! The end-of-run summary: time per frame, the worst edge strain, and what `tailor check`'s
 //! test finds (body penetrations, self-intersections), on standard output and as
-//! `summary.json` in the output directory.
+//! `summary.json` in the output directory, with the frames that failed their quality
+//! ([`super::quality`]) under `failures`.
 
 use std::path::Path;
 
@@ -10,11 +11,20 @@ use serde_json::json;
 use crate::checkpoint::FrameStats;
 use crate::output::write_atomically;
 
-/// Prints the summary of `stats` (every frame simulated so far) and writes `summary.json`.
+use super::quality::{self, Failure};
+
+/// Prints the summary of `stats` (every frame simulated so far) and writes `summary.json`,
+/// `failures` the frames that failed their quality.
 ///
 /// # Errors
 /// When `summary.json` cannot be written.
-pub fn report(scene: &Path, dir: &Path, thickness: f64, stats: &[FrameStats]) -> Result<()> {
+pub fn report(
+    scene: &Path,
+    dir: &Path,
+    thickness: f64,
+    stats: &[FrameStats],
+    failures: &[Failure],
+) -> Result<()> {
     let stepped: Vec<&FrameStats> = stats.iter().filter(|s| s.frame > 0).collect();
     let total_ms: f64 = stepped.iter().map(|s| s.ms).sum();
     let mean_ms = total_ms / stepped.len().max(1) as f64;
@@ -56,6 +66,7 @@ pub fn report(scene: &Path, dir: &Path, thickness: f64, stats: &[FrameStats]) ->
             row["frame"] = json!(s.frame);
             row["ms"] = json!(s.ms);
             row["max_strain"] = json!(s.max_strain);
+            row["strained_edge"] = json!(s.strained_edge);
             row["substeps"] = json!(s.substeps);
             row["cg_iterations"] = json!(s.cg_iterations);
             row
@@ -76,6 +87,7 @@ pub fn report(scene: &Path, dir: &Path, thickness: f64, stats: &[FrameStats]) ->
             "self_intersecting_pairs": crossing,
             "frames_not_clean": dirty,
         },
+        "failures": quality::json(failures),
     });
     let text = serde_json::to_string_pretty(&summary)? + "\n";
     let path = dir.join("summary.json");

@@ -293,14 +293,24 @@ impl Model {
     /// Largest relative change of edge length, |l/L − 1|, at the given positions.
     #[must_use]
     pub fn max_strain(&self, positions: &[Point]) -> f64 {
+        self.worst_edge(positions).map_or(0.0, |(_, strain)| strain)
+    }
+
+    /// The edge of [`Self::max_strain`] (its two vertices; the first of equals) and its
+    /// strain, so a report can say where the cloth stretched. `None` when there is no edge
+    /// or every strain is NaN.
+    #[must_use]
+    pub fn worst_edge(&self, positions: &[Point]) -> Option<([u32; 2], f64)> {
         let s = &self.springs;
-        s.verts
-            .iter()
-            .zip(&s.rest)
-            .map(|(&[a, b], &l)| {
-                ((positions[a as usize] - positions[b as usize]).norm() / l - 1.0).abs()
-            })
-            .fold(0.0, f64::max)
+        let mut worst = None;
+        for (&[a, b], &l) in s.verts.iter().zip(&s.rest) {
+            let strain = ((positions[a as usize] - positions[b as usize]).norm() / l - 1.0).abs();
+            // NaN never compares greater, so it is skipped as `f64::max` skips it.
+            if strain > worst.map_or(-1.0, |(_, w)| w) {
+                worst = Some(([a, b], strain));
+            }
+        }
+        worst
     }
 }
 
@@ -343,6 +353,23 @@ mod tests {
         assert!((s.stiffness[e][0] - 2.0e3 / 16.0).abs() < 1e-9);
         assert_eq!(model.shear_quads().len(), 16);
         assert_eq!(model.edges().len(), 40);
+    }
+
+    #[test]
+    fn worst_edge_is_the_edge_of_max_strain() {
+        let model = Model::new(&sheet(3, 3, 1.0, 1.0), &Material::COTTON).unwrap();
+        let mut positions = model.rest_positions().to_vec();
+        assert_eq!(model.worst_edge(&positions).map(|(_, s)| s), Some(0.0));
+        // Corner vertex 0 pulled half an edge away from one neighbour: its other edge is
+        // perpendicular and stretches only by √1.25 − 1.
+        let corner = *model.edges().iter().find(|e| e.contains(&0)).unwrap();
+        let other = corner[0] + corner[1];
+        let pull = (positions[0] - positions[other as usize]) * 0.5;
+        positions[0] += pull;
+        let (edge, strain) = model.worst_edge(&positions).unwrap();
+        assert_eq!(edge, corner);
+        assert!((strain - 0.5).abs() < 1e-12);
+        assert_eq!(model.max_strain(&positions), strain);
     }
 
     #[test]
