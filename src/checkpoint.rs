@@ -148,8 +148,9 @@ pub fn load(dir: &Path, fingerprint: &Fingerprint, vertices: usize) -> Result<Op
     let c = decode(&bytes).with_context(|| format!("reading {}", file.display()))?;
     if let Some(key) = c.fingerprint.first_difference(fingerprint) {
         bail!(
-            "{} was written for another shot ({key} differs); only [scene] frames may \
-             change between a run and its resumption; run without --resume to start over",
+            "{} was written for another shot ({key} differs); only [scene] frames and \
+             strict may change between a run and its resumption; run without --resume to \
+             start over",
             file.display()
         );
     }

@@ -213,11 +213,15 @@ pub struct Scene {
     pub fingerprint: Fingerprint,
 }
 
+/// The scene keys a resumed run may change.
+const IGNORED_ON_RESUME: [&str; 2] = ["[scene] frames", "[scene] strict"];
+
 /// What determines a shot, key by key: a hash of each scene key's value, of the garment file
 /// and of the body's first frame. `[scene] frames` is left out, so that a resumed run may
-/// extend a shot: frames are simulated one after another, and frame 40 of a 60-frame run is
-/// frame 40 of a 40-frame one. A key given with its default value counts as changed from the
-/// key left out, which errs on the side of refusing.
+/// extend a shot (frames are simulated one after another, and frame 40 of a 60-frame run is
+/// frame 40 of a 40-frame one), and so is `[scene] strict`, which only decides the exit
+/// status. A key given with its default value counts as changed from the key left out, which
+/// errs on the side of refusing.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Fingerprint(pub Vec<(String, u64)>);
 
@@ -234,7 +238,7 @@ impl Fingerprint {
                 None => vec![(section.clone(), value)],
             };
             for (name, value) in keys {
-                if name != "[scene] frames" {
+                if !IGNORED_ON_RESUME.contains(&name.as_str()) {
                     entries.push((name, Fnv::hash(value.to_string().as_bytes())));
                 }
             }
