@@ -3,8 +3,10 @@
 //! After every frame the simulator's whole state at the frame boundary is written atomically
 //! to `tailor_checkpoint.bin` in the output directory: positions, velocities and the time
 //! (the `f64` the solver accumulates, so later substeps land on the same instants), the
-//! contacts carried into the next step ([`tailor_cloth::Simulator::carried_contacts`]), the
-//! frame number, and the per-frame figures of the summary so far.
+//! positions and velocities one substep back with that substep's length (BDF2 steps from
+//! two states: [`tailor_cloth::State::previous`]), the contacts carried into the next step
+//! ([`tailor_cloth::Simulator::carried_contacts`]), the frame number, and the per-frame
+//! figures of the summary so far.
 //!
 //! That is all the state, because everything else a step reads is a function of the scene
 //! or is rebuilt within the step: attachment targets and the body's motion are recomputed
@@ -23,6 +25,7 @@
 //! u32 keys  keys × (u32 length, UTF-8 name, u64 hash)        the scene's fingerprint
 //! u32 frame  f64 time  u32 vertices
 //! vertices × (3 f64 position)  vertices × (3 f64 velocity)  vertices × (u8 carried contact)
+//! u8 previous (0 or 1), if 1: f64 step  vertices × (3 f64 position)  vertices × (3 f64 velocity)
 //! u32 rows  rows × (u32 frame, f64 ms, f64 strain, 2 u32 strained edge, u32 substeps, u32 cg,
 //!                   u64 penetrating, f64 deepest, u64 self-intersecting pairs)
 //! ```
@@ -36,8 +39,8 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use tailor_cloth::State;
 use tailor_cloth::energy::Vec3;
+use tailor_cloth::{Previous, State};
 use tailor_subdiv::Point;
 
 use crate::check::Findings;
@@ -45,7 +48,7 @@ use crate::output::write_atomically;
 use crate::scene::Fingerprint;
 
 const MAGIC: &[u8; 8] = b"TAILORCK";
-const VERSION: u32 = 3;
+const VERSION: u32 = 4;
 
 /// The checkpoint file in an output directory.
 #[must_use]
@@ -108,12 +111,24 @@ fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {
     w.write_all(&c.frame.to_le_bytes())?;
     w.write_all(&c.state.time.to_le_bytes())?;
     w.write_all(&count(c.state.positions.len())?.to_le_bytes())?;
-    let coords = c.state.positions.iter().flat_map(|p| p.coords.iter());
-    for x in coords.chain(c.state.velocities.iter().flat_map(|v| v.iter())) {
-        w.write_all(&x.to_le_bytes())?;
-    }
+    let write_motion = |w: &mut dyn Write, positions: &[Point], velocities: &[Vec3]| {
+        let coords = positions.iter().flat_map(|p| p.coords.iter());
+        for x in coords.chain(velocities.iter().flat_map(|v| v.iter())) {
+            w.write_all(&x.to_le_bytes())?;
+        }
+        io::Result::Ok(())
+    };
+    write_motion(w, &c.state.positions, &c.state.velocities)?;
     let flags: Vec<u8> = c.carried_contacts.iter().map(|&b| u8::from(b)).collect();
     w.write_all(&flags)?;
+    match &c.state.previous {
+        None => w.write_all(&[0])?,
+        Some(p) => {
+            w.write_all(&[1])?;
+            w.write_all(&p.step.to_le_bytes())?;
+            write_motion(w, &p.positions, &p.velocities)?;
+        }
+    }
     w.write_all(&count(c.stats.len())?.to_le_bytes())?;
     for s in &c.stats {
         let f = &s.findings;
@@ -192,6 +207,15 @@ impl Reader<'_> {
         Ok(Vec3::new(self.f64()?, self.f64()?, self.f64()?))
     }
 
+    /// `n` positions, then `n` velocities.
+    fn motion(&mut self, n: usize) -> Result<(Vec<Point>, Vec<Vec3>)> {
+        let positions = (0..n)
+            .map(|_| self.vec3().map(Point::from))
+            .collect::<Result<_>>()?;
+        let velocities = (0..n).map(|_| self.vec3()).collect::<Result<_>>()?;
+        Ok((positions, velocities))
+    }
+
     fn count(&mut self) -> Result<usize> {
         Ok(usize::try_from(self.u64()?)?)
     }
@@ -223,10 +247,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
     let frame = r.u32()?;
     let time = r.f64()?;
     let n = r.u32()? as usize;
-    let positions = (0..n)
-        .map(|_| r.vec3().map(Point::from))
-        .collect::<Result<_>>()?;
-    let velocities = (0..n).map(|_| r.vec3()).collect::<Result<_>>()?;
+    let (positions, velocities) = r.motion(n)?;
     let carried_contacts = (0..n)
         .map(|_| match r.take::<1>()? {
             [0] => Ok(false),
@@ -234,6 +255,19 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
             [x] => bail!("bad contact flag {x}"),
         })
         .collect::<Result<_>>()?;
+    let previous = match r.take::<1>()? {
+        [0] => None,
+        [1] => {
+            let step = r.f64()?;
+            let (positions, velocities) = r.motion(n)?;
+            Some(Previous {
+                positions,
+                velocities,
+                step,
+            })
+        }
+        [x] => bail!("bad previous-state flag {x}"),
+    };
     let rows = r.u32()?;
     let stats = (0..rows)
         .map(|_| {
@@ -262,6 +296,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
             positions,
             velocities,
             time,
+            previous,
         },
         carried_contacts,
         stats,
@@ -284,6 +319,11 @@ mod tests {
                 positions: vec![Point::new(0.1, -2.5e-300, 1.0 / 3.0); 2],
                 velocities: vec![Vec3::new(f64::MIN_POSITIVE, -0.0, 7.0); 2],
                 time: 7.0 / 24.0,
+                previous: Some(Previous {
+                    positions: vec![Point::new(-0.0, 1e-310, 2.0); 2],
+                    velocities: vec![Vec3::new(3.0, f64::MAX, -1.5); 2],
+                    step: 1.0 / 120.0,
+                }),
             },
             carried_contacts: vec![true, false],
             stats: vec![FrameStats {

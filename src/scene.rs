@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use nalgebra::Vector3;
 use serde::Deserialize;
-use tailor_cloth::{Material, Stiffness};
+use tailor_cloth::{Integrator, Material, Stiffness};
 use tailor_subdiv::obj::{self, ObjDocument};
 use tailor_subdiv::{Mesh, Point};
 
@@ -48,6 +48,8 @@ struct SceneSection {
     frames: u32,
     /// Implicit steps per frame (the substep is 1 / (fps · substeps) seconds).
     substeps: u32,
+    /// The implicit integrator.
+    integrator: IntegratorName,
     /// m/s².
     gravity: [f64; 3],
     /// Exit with status 3 when a frame fails its quality, as `--strict` does.
@@ -60,10 +62,19 @@ impl Default for SceneSection {
             fps: 24.0,
             frames: 60,
             substeps: 5,
+            integrator: IntegratorName::Bdf2,
             gravity: [0.0, -9.81, 0.0],
             strict: false,
         }
     }
+}
+
+/// `[scene] integrator`: the names of [`Integrator`]'s choices.
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(rename_all = "kebab-case")]
+enum IntegratorName {
+    Bdf2,
+    BackwardEuler,
 }
 
 /// `[cloth]`: the garment, its fabric and its constraints.
@@ -197,6 +208,8 @@ pub struct Scene {
     pub frames: u32,
     /// Implicit steps per frame.
     pub substeps: u32,
+    /// The implicit integrator.
+    pub integrator: Integrator,
     /// m/s².
     pub gravity: Vector3<f64>,
     /// Whether a frame failing its quality (strain, penetration, self-intersection) makes
@@ -392,6 +405,10 @@ pub fn load(path: &Path, last_frame: Option<u32>) -> Result<Scene> {
         fps: scene.fps,
         frames: scene.frames,
         substeps: scene.substeps,
+        integrator: match scene.integrator {
+            IntegratorName::Bdf2 => Integrator::Bdf2,
+            IntegratorName::BackwardEuler => Integrator::BackwardEuler,
+        },
         gravity: Vector3::from(scene.gravity),
         strict: scene.strict,
         cloth,

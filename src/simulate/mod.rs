@@ -325,6 +325,7 @@ impl<'a> Shot<'a> {
         }
         let settings = Settings {
             max_substep: 1.0 / (scene.fps * f64::from(scene.substeps)),
+            integrator: scene.integrator,
             gravity: scene.gravity,
             thickness: c.thickness,
             friction: c.friction,

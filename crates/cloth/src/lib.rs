@@ -50,7 +50,7 @@ pub use constraint::{Attachment, Contact, Motion};
 pub use error::{ClothError, StepFailure};
 pub use material::Material;
 pub use model::{Model, Stiffness};
-pub use simulator::{Settings, Simulator, State, StepReport};
+pub use simulator::{Integrator, Previous, Settings, Simulator, State, StepReport};
 
 #[cfg(test)]
 pub(crate) mod testing {

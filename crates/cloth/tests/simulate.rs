@@ -10,8 +10,8 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use tailor_cloth::shapes::{sheet, sphere};
 use tailor_cloth::{
-    Attachment, ClothError, Contact, Material, Model, Motion, Settings, Simulator, State,
-    StepFailure,
+    Attachment, ClothError, Contact, Integrator, Material, Model, Motion, Settings, Simulator,
+    State, StepFailure,
 };
 use tailor_subdiv::Point;
 
@@ -276,10 +276,11 @@ fn an_impossible_solve_is_a_typed_error_not_nan() {
 /// A 10 cm sheet of 5 × 5 vertices with `material`, no pins, no body, falling for `seconds`
 /// at 24 fps in `substeps` implicit steps a frame; returns the mean drop and the mean
 /// vertical velocity at the end.
-fn fall(material: &Material, substeps: u32, seconds: f64) -> (f64, f64) {
+fn fall(material: &Material, integrator: Integrator, substeps: u32, seconds: f64) -> (f64, f64) {
     let model = Model::new(&sheet(5, 5, 0.1, 0.1), material).unwrap();
     let settings = Settings {
         max_substep: FRAME / f64::from(substeps),
+        integrator,
         ..Settings::default()
     };
     let mut sim = Simulator::new(model, settings).unwrap();
@@ -294,14 +295,25 @@ fn fall(material: &Material, substeps: u32, seconds: f64) -> (f64, f64) {
     (drop, speed)
 }
 
-/// Backward Euler's own drop under constant gravity g after `steps` steps of `h` from rest,
-/// the scalar recurrence v += h g, y += h v (not the continuous g t²/2: the test asks that the
-/// solve applies every substep's force, not that the integrator is exact).
-fn backward_euler_drop(g: f64, h: f64, steps: u32) -> f64 {
+/// The integrator's own drop under constant gravity g after `steps` steps of `h` from rest,
+/// its scalar recurrence (the test asks that the solve applies every substep's force, not
+/// that the integrator is exact): backward Euler v += h g, y += h v; BDF2 started by a
+/// trapezoidal step, y₁ = h (v₀ + v₁) / 2, then yₙ₊₁ = (4 yₙ − yₙ₋₁ + 2 h vₙ₊₁) / 3 with
+/// vₙ₊₁ = (4 vₙ − vₙ₋₁ + 2 h g) / 3 (which is g t² / 2 exactly).
+fn own_drop(integrator: Integrator, g: f64, h: f64, steps: u32) -> f64 {
     let (mut v, mut y) = (0.0, 0.0);
+    let mut previous: Option<(f64, f64)> = None;
     for _ in 0..steps {
-        v += h * g;
-        y += h * v;
+        let (v1, y1) = match (integrator, previous) {
+            (Integrator::BackwardEuler, _) => (v + h * g, y + h * (v + h * g)),
+            (Integrator::Bdf2, None) => (v + h * g, y + 0.5 * h * (2.0 * v + h * g)),
+            (Integrator::Bdf2, Some((pv, py))) => {
+                let v1 = (4.0 * v - pv + 2.0 * h * g) / 3.0;
+                (v1, (4.0 * y - py + 2.0 * h * v1) / 3.0)
+            }
+        };
+        previous = Some((v, y));
+        (v, y) = (v1, y1);
     }
     y
 }
@@ -312,14 +324,16 @@ fn free_fall_applies_gravity_at_every_substep_count() {
         drag: 0.0,
         ..Material::COTTON
     };
-    for substeps in [1, 2, 5, 20, 50] {
-        let (drop, _) = fall(&still, substeps, 1.0);
-        let h = FRAME / f64::from(substeps);
-        let exact = backward_euler_drop(9.81, h, 24 * substeps);
-        assert!(
-            (drop / exact - 1.0).abs() < 5e-3,
-            "{substeps} substeps a frame: fell {drop} m, backward Euler {exact} m"
-        );
+    for integrator in [Integrator::Bdf2, Integrator::BackwardEuler] {
+        for substeps in [1, 2, 5, 20, 50] {
+            let (drop, _) = fall(&still, integrator, substeps, 1.0);
+            let h = FRAME / f64::from(substeps);
+            let exact = own_drop(integrator, 9.81, h, 24 * substeps);
+            assert!(
+                (drop / exact - 1.0).abs() < 5e-3,
+                "{integrator:?}, {substeps} substeps a frame: fell {drop} m, exact {exact} m"
+            );
+        }
     }
 }
 
@@ -331,12 +345,14 @@ fn linear_drag_gives_the_terminal_velocity() {
         ..Material::LEATHER
     };
     let terminal = material.density * 9.81 / material.drag;
-    for substeps in [2, 5, 20, 50] {
-        let (_, speed) = fall(&material, substeps, 5.0);
-        assert!(
-            (speed / terminal - 1.0).abs() < 5e-3,
-            "{substeps} substeps a frame: {speed} m/s, terminal {terminal} m/s"
-        );
+    for integrator in [Integrator::Bdf2, Integrator::BackwardEuler] {
+        for substeps in [2, 5, 20, 50] {
+            let (_, speed) = fall(&material, integrator, substeps, 5.0);
+            assert!(
+                (speed / terminal - 1.0).abs() < 5e-3,
+                "{integrator:?}, {substeps} substeps a frame: {speed} m/s, terminal {terminal}"
+            );
+        }
     }
 }
 
