@@ -9,7 +9,7 @@
 //! impulse times Σ αₖ² / mₖ ([`Motion::push_apart`]). The normal-cone culling of the collide
 //! crate keeps both queries cheap where the cloth is smooth.
 
-use tailor_collide::{CollideError, Hierarchy, Impacts, Neighbours};
+use tailor_collide::{CollideError, Hierarchy, Impacts, LocalFaces, Neighbours};
 
 use super::Motion;
 use crate::energy::Vec3;
@@ -46,7 +46,7 @@ pub(super) fn repel(
 ) -> Result<(), CollideError> {
     moved.fill(false);
     cloth.refit(m.x0, 0.0)?;
-    cloth.self_proximity_into(thickness, &mut buffers.near)?;
+    cloth.self_proximity_into(thickness, &LocalFaces::default(), &mut buffers.near)?;
     let near = &buffers.near;
     let triangles = cloth.triangles();
     for p in 0..near.len() {
