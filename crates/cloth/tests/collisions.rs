@@ -416,3 +416,66 @@ fn the_subdivided_surface_keeps_the_thickness_when_the_simulator_knows_it() {
         "a refined point came within {with} m of the ball (thickness {thickness} m)"
     );
 }
+
+/// A cotton strip 2.5 cm wide with edges of `edge` m, clamped by its first two vertex rows
+/// with 3 cm overhanging, after `frames` frames: the final state, the tip angle in degrees
+/// (of the centreline's chord from the clamp to the tip, below the horizontal: over 90° it has
+/// curled back over the clamp), the worst edge strain of any frame and the impacts.
+fn clamped_strip(edge: f64, self_collision: bool, frames: u32) -> (State, f64, f64, u32) {
+    let (length, width) = (0.03 + edge, 0.025);
+    let columns = (length / edge).round() as u32 + 1;
+    let rows = (width / edge).round() as u32 + 1;
+    let garment = sheet(columns, rows, length, width);
+    let settings = Settings {
+        self_collision,
+        ..Settings::default()
+    };
+    let model = Model::new(&garment, &Material::COTTON).unwrap();
+    let mut sim = Simulator::new(model, settings).unwrap();
+    let clamp: Vec<u32> = (0..rows)
+        .flat_map(|j| [j * columns, j * columns + 1])
+        .collect();
+    sim.pin(&clamp, Motion::Fixed).unwrap();
+    let mut state = State::at_rest(sim.model());
+    let (mut strain, mut impacts) = (0.0f64, 0);
+    for _ in 0..frames {
+        let report = sim.step(&mut state, FRAME).unwrap();
+        strain = strain.max(report.max_strain);
+        impacts += report.impacts;
+    }
+    let middle = rows / 2 * columns;
+    let clamped = state.positions[(middle + 1) as usize];
+    let tip = state.positions[(middle + columns - 1) as usize];
+    let angle = (clamped.y - tip.y).atan2(tip.x - clamped.x).to_degrees();
+    (state, angle, strain, impacts)
+}
+
+#[test]
+fn a_finely_meshed_strip_droops_the_same_with_self_collision() {
+    // Edges of a quarter and a half of the 5 mm thickness: in the rest shape every vertex lies
+    // within the thickness of the faces up to four (two) rings around it. Nothing else comes
+    // near, so self-collision must not change the droop: no repulsion, no impact.
+    for (edge, frames) in [(0.00125, 24), (0.0025, 48)] {
+        let (free, free_angle, free_strain, _) = clamped_strip(edge, false, frames);
+        let (held, angle, strain, impacts) = clamped_strip(edge, true, frames);
+        assert!(
+            (30.0..80.0).contains(&free_angle),
+            "edge {edge}: without self-collision the tip is at {free_angle}°"
+        );
+        let apart = free
+            .positions
+            .iter()
+            .zip(&held.positions)
+            .map(|(p, q)| (p - q).norm())
+            .fold(0.0, f64::max);
+        assert!(
+            apart <= 1e-9 && impacts == 0,
+            "edge {edge}: self-collision moved the strip by {apart} m ({impacts} impacts), tip \
+             at {angle}° against {free_angle}°"
+        );
+        assert!(
+            strain <= 0.1 + 1e-9 && free_strain <= 0.1 + 1e-9,
+            "edge {edge}: strain {strain}, {free_strain} without self-collision"
+        );
+    }
+}

@@ -24,7 +24,7 @@ use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::TriMesh;
 use rayon::prelude::*;
 use shapes::{SHAPES, glam, parry, shape, sizes, tailor};
-use tailor_collide::{Hierarchy, Point};
+use tailor_collide::{Hierarchy, LocalFaces, Point};
 
 /// The fastest of `runs` alternating runs of `ours` and `theirs`, in milliseconds.
 fn fastest(runs: usize, mut ours: impl FnMut(), mut theirs: impl FnMut()) -> (f64, f64) {
@@ -104,7 +104,11 @@ fn main() {
                     &format!("self proximity {name}"),
                     triangles,
                     runs,
-                    || drop(black_box(h.self_proximity(THICKNESS).unwrap())),
+                    || {
+                        drop(black_box(
+                            h.self_proximity(THICKNESS, &LocalFaces::default()).unwrap(),
+                        ))
+                    },
                     &mut traverse,
                 );
             }

@@ -9,7 +9,8 @@
 //!
 //! - proximity ([`Hierarchy::closest_points`], [`Hierarchy::faces_within`],
 //!   [`Hierarchy::self_proximity`], [`Hierarchy::edge_proximity`]) for repulsion and for the
-//!   body's inside test ([`Hierarchy::signed_distances`]);
+//!   body's inside test ([`Hierarchy::signed_distances`]), with the faces around each vertex on
+//!   the surface ([`Hierarchy::local_faces`]) for repulsion to leave alone;
 //! - exact triangle–triangle crossings ([`Hierarchy::self_intersections`]);
 //! - continuous collisions over a step ([`Hierarchy::self_impacts`], [`Hierarchy::impacts_with`],
 //!   and [`Hierarchy::vertex_impacts_with`] for the vertex–triangle part alone), after Bridson,
@@ -36,6 +37,7 @@ mod error;
 mod hierarchy;
 mod inside;
 mod intersect;
+mod local;
 mod proximity;
 mod topology;
 mod traverse;
@@ -46,6 +48,7 @@ pub use continuous::{EdgeEdgeImpact, Impacts, VertexTriangleImpact};
 pub use edges::{EdgeProximity, segments_closest_points};
 pub use error::CollideError;
 pub use hierarchy::Hierarchy;
+pub use local::LocalFaces;
 pub use proximity::{Closest, Neighbours};
 pub use triangle::triangles_intersect;
 

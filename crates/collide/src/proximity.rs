@@ -19,7 +19,9 @@
 //! them won.
 //!
 //! A vertex of the mesh asking for the faces near it, excluding its own, climbs the same way
-//! from the face that owns it, which lies next to it and is excluded anyway.
+//! from the face that owns it, which lies next to it and is excluded anyway. It also skips the
+//! faces around it on the surface that the caller lists ([`crate::local`]) before projecting
+//! on them.
 //!
 //! Self-proximity does not use the normal cones: they prove that a region cannot *touch*
 //! itself, not that its vertices stay farther than a distance from its other faces (a finely
@@ -33,6 +35,7 @@ use rayon::prelude::*;
 use crate::convert::{to_glam, to_point, to_vector};
 use crate::error::CollideError;
 use crate::hierarchy::{Hierarchy, Pending, check_distance, fresh};
+use crate::local::LocalFaces;
 use crate::triangle::is_degenerate;
 use crate::{Point, Vector};
 
@@ -219,12 +222,18 @@ impl Hierarchy {
         Ok(())
     }
 
-    /// For each vertex of the mesh, every face within `distance` that does not use the vertex.
+    /// For each vertex of the mesh, every face within `distance` that does not use the vertex
+    /// and that `skip` does not list for it ([`Hierarchy::local_faces`]; the empty table skips
+    /// nothing).
     ///
     /// # Errors
     /// [`CollideError::BadDistance`] for a negative or NaN distance.
-    pub fn self_proximity(&self, distance: f64) -> Result<Neighbours, CollideError> {
-        fresh(|out| self.self_proximity_into(distance, out))
+    pub fn self_proximity(
+        &self,
+        distance: f64,
+        skip: &LocalFaces,
+    ) -> Result<Neighbours, CollideError> {
+        fresh(|out| self.self_proximity_into(distance, skip, out))
     }
 
     /// [`Hierarchy::self_proximity`] into `out`, reusing its storage from step to step.
@@ -234,19 +243,22 @@ impl Hierarchy {
     pub fn self_proximity_into(
         &self,
         distance: f64,
+        skip: &LocalFaces,
         out: &mut Neighbours,
     ) -> Result<(), CollideError> {
         check_distance("distance", distance)?;
         out.fill(self.vertex_count(), |v, stack, hits| {
             let owner = self.topology.vertex_owner[v];
             let seed = (owner != u32::MAX).then_some(owner);
+            let skipped = skip.of(v);
             let v = v as u32;
-            let incident = |f: u32| self.topology.face(f).contains(&v);
+            let excluded =
+                |f: u32| self.topology.face(f).contains(&v) || skipped.binary_search(&f).is_ok();
             self.within(
                 self.end()[v as usize],
                 distance,
                 seed,
-                incident,
+                excluded,
                 stack,
                 hits,
             );

@@ -5,13 +5,13 @@
 
 mod common;
 
-use common::{Mesh, Rng, folded_sheet, ngon_sheet, soup, sphere, torus, wave};
+use common::{Mesh, Rng, folded_sheet, ngon_sheet, sheet, soup, sphere, torus, wave};
 use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::Triangle;
 use tailor_collide::{
-    CollideError, Hierarchy, Impacts, Neighbours, Point, edge_edge_impact, segments_closest_points,
-    triangles_intersect, vertex_triangle_impact,
+    CollideError, Hierarchy, Impacts, LocalFaces, Neighbours, Point, edge_edge_impact,
+    segments_closest_points, triangles_intersect, vertex_triangle_impact,
 };
 
 fn build(m: &Mesh) -> Hierarchy {
@@ -128,7 +128,7 @@ fn self_proximity_matches_brute_force() {
     for (name, m) in meshes() {
         let h = build(&m);
         for d in [0.02, 0.15] {
-            let got = h.self_proximity(d).unwrap();
+            let got = h.self_proximity(d, &LocalFaces::default()).unwrap();
             for (v, q) in m.positions.iter().enumerate() {
                 let all = all_distances(&m, &m.positions, q);
                 let face_has_v = |f: u32| {
@@ -144,6 +144,49 @@ fn self_proximity_matches_brute_force() {
             }
         }
     }
+}
+
+#[test]
+fn local_faces_are_the_sheet_around_a_vertex_not_the_layer_above() {
+    // Flat: every face within the distance is around the vertex, and skipping them leaves
+    // nothing near.
+    let flat = sheet(12, |_, _| 0.0);
+    let h = build(&flat);
+    let d = 0.2;
+    let local = h.local_faces(d).unwrap();
+    let near = h.self_proximity(d, &LocalFaces::default()).unwrap();
+    for v in 0..flat.positions.len() {
+        let faces: Vec<u32> = near.of(v).iter().map(|c| c.face).collect();
+        assert_eq!(local.of(v), &faces[..], "flat: vertex {v}");
+    }
+    assert!(local.pair_count() > 0);
+    assert!(h.self_proximity(d, &local).unwrap().hits().is_empty());
+    // The taco: its layers lie 0.2 apart and its crease starts at x = 0.4. A vertex of the
+    // lower layer farther than the distance from the crease skips faces around it on its own
+    // layer, none of the upper layer, and still finds the upper layer near.
+    let taco = folded_sheet(20, 0.0);
+    let h = build(&taco);
+    let d = 0.25;
+    let local = h.local_faces(d).unwrap();
+    let near = h.self_proximity(d, &local).unwrap();
+    let upper = |f: u32| {
+        taco.corners[taco.offsets[f as usize] as usize..taco.offsets[f as usize + 1] as usize]
+            .iter()
+            .all(|&c| taco.positions[c as usize].z == 0.2)
+    };
+    let mut checked = 0;
+    for (v, p) in taco.positions.iter().enumerate() {
+        if p.z == 0.0 && p.x < 0.1 {
+            assert!(!local.of(v).is_empty(), "taco: vertex {v} skips nothing");
+            assert!(
+                !local.of(v).iter().any(|&f| upper(f)),
+                "taco: vertex {v} skips the upper layer"
+            );
+            assert!(near.of(v).iter().any(|c| upper(c.face)), "taco: vertex {v}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 0);
 }
 
 fn share_vertex(m: &Mesh, f: u32, g: u32) -> bool {
@@ -463,7 +506,7 @@ fn answers_do_not_depend_on_thread_count() {
             h.refit(&end, 0.0).unwrap();
             (
                 (h.depth(), h.closest_points(&queries, 0.2).unwrap()),
-                h.self_proximity(0.02).unwrap(),
+                h.self_proximity(0.02, &LocalFaces::default()).unwrap(),
                 h.self_intersections(),
                 impacts,
                 body_hits,
@@ -513,7 +556,7 @@ fn bad_input_is_an_error_and_degenerate_triangles_are_counted() {
         CollideError::NonFiniteQuery { point: 0 }
     );
     assert!(matches!(
-        h.self_proximity(f64::NAN),
+        h.self_proximity(f64::NAN, &LocalFaces::default()),
         Err(CollideError::BadDistance { .. })
     ));
 
@@ -715,8 +758,12 @@ fn into_variants_reuse_their_buffers() {
         assert_eq!(closest, h.closest_points(&queries, 0.3).unwrap());
         h.faces_within_into(&queries, 0.1, &mut within).unwrap();
         assert_eq!(within, h.faces_within(&queries, 0.1).unwrap());
-        h.self_proximity_into(0.05, &mut near).unwrap();
-        assert_eq!(near, h.self_proximity(0.05).unwrap());
+        h.self_proximity_into(0.05, &LocalFaces::default(), &mut near)
+            .unwrap();
+        assert_eq!(
+            near,
+            h.self_proximity(0.05, &LocalFaces::default()).unwrap()
+        );
         h.edge_proximity_into(0.05, &mut edges).unwrap();
         assert_eq!(edges, h.edge_proximity(0.05).unwrap());
     }

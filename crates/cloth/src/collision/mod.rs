@@ -27,9 +27,10 @@
 //!    projection to push back out.
 //! 3. **Self repulsion** ([`Collisions::repel`]): for every vertex within the thickness of a
 //!    face of the garment, an impulse that stops the pair approaching and starts separating it
-//!    by a tenth of the overlap per step (Bridson et al. §7.1). Stopping an approach at once
-//!    strains the edges around the pair, so strain limiting runs again with the vertices it
-//!    moved a hundred times heavier: the cloth around them takes up the slack.
+//!    by a tenth of the overlap per step (Bridson et al. §7.1), except the pairs the rest shape
+//!    itself puts that near (see the `self_collision` module). Stopping an
+//!    approach at once strains the edges around the pair, so strain limiting runs again with
+//!    the vertices it moved a hundred times heavier: the cloth around them takes up the slack.
 //! 4. **Self impacts, the fail-safe** ([`self_collision::resolve_impacts`]): continuous
 //!    vertex–triangle and edge–edge tests over the straight-line motion; each impact gets an
 //!    inelastic impulse at the time of contact, each round of impulses is followed by strain
@@ -86,6 +87,8 @@ pub(crate) struct Collisions {
     /// The refined surface that must clear the obstacle, when the caller gave one.
     pub surface: Option<Surface>,
     cloth: Hierarchy,
+    /// The model's rest positions, where self repulsion finds the pairs it leaves alone.
+    rest: Vec<Point>,
     /// The body contacts of the current substep.
     pub contacts: Vec<Contact>,
     /// Vertices whose contact pulled them towards the body in the last substep.
@@ -188,6 +191,7 @@ impl Collisions {
             obstacle: None,
             surface: None,
             cloth: Hierarchy::build(&model.rest, &model.face_offsets, &model.face_vertices)?,
+            rest: model.rest.clone(),
             contacts: Vec::new(),
             pulling: vec![false; n],
             held: Vec::with_capacity(n),
@@ -290,6 +294,7 @@ impl Collisions {
             let mut layers = motion.weighted(&self.held);
             self_collision::repel(
                 &mut self.cloth,
+                &self.rest,
                 settings.thickness,
                 &mut layers,
                 &mut self.layers,
