@@ -65,8 +65,11 @@ pub enum ClothError {
         /// The value.
         value: f64,
     },
-    /// The obstacle or the garment could not be turned into a collision hierarchy, or the
-    /// obstacle's positions do not fit its faces.
+    /// The obstacle was given a motion, but none was set.
+    #[error("the obstacle was given a motion, but no obstacle was set (Simulator::set_obstacle)")]
+    NoObstacle,
+    /// The obstacle or the garment could not be turned into a collision hierarchy, the
+    /// obstacle's positions do not fit its faces, or a collision query failed.
     #[error("collision: {0}")]
     Collide(#[from] tailor_collide::CollideError),
     /// A step failed even at the smallest allowed substep.

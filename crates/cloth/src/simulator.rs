@@ -58,6 +58,7 @@
 //! [`Settings::max_halvings`] levels, before [`ClothError::StepFailed`] is returned; the state
 //! is only written when a substep succeeds, so it never holds NaN.
 
+use tailor_collide::CollideError;
 use tailor_subdiv::{Point, StencilTable};
 
 use crate::assemble::{Assembly, Coefficients, Environment};
@@ -68,6 +69,34 @@ use crate::pcg::{Pcg, Stop};
 use crate::reduce::{partial_count, sum_by};
 use crate::strain_limit::{Floor, StrainLimiter};
 use crate::{ClothError, Model, StepFailure};
+
+/// Why a substep did not complete.
+#[derive(Debug)]
+enum SubstepError {
+    /// A numeric failure, which a shorter substep may avoid.
+    Retry(StepFailure),
+    /// An error no retry can mend (a collision query that failed).
+    Fatal(ClothError),
+}
+
+impl From<StepFailure> for SubstepError {
+    fn from(failure: StepFailure) -> Self {
+        Self::Retry(failure)
+    }
+}
+
+impl From<CollideError> for SubstepError {
+    /// A non-finite position or query point is numeric (a shorter substep may not make it);
+    /// any other collision error is not.
+    fn from(error: CollideError) -> Self {
+        match error {
+            CollideError::NonFinitePosition { .. } | CollideError::NonFiniteQuery { .. } => {
+                Self::Retry(StepFailure::NonFinite)
+            }
+            error => Self::Fatal(ClothError::Collide(error)),
+        }
+    }
+}
 
 /// Most times a substep's linear system is solved again with the body contacts its last
 /// solution revealed.
@@ -478,9 +507,9 @@ impl Simulator {
     /// (end − start)/(t1 − t0); before `t0` and after `t1` it holds still.
     ///
     /// # Errors
-    /// [`ClothError::BadValue`] without an obstacle (value NaN), for `t1 <= t0` or a
-    /// non-finite position; [`ClothError::WrongLength`] for a position count that does not
-    /// match the obstacle.
+    /// [`ClothError::NoObstacle`] without an obstacle; [`ClothError::BadValue`] for
+    /// `t1 <= t0` or a non-finite position; [`ClothError::WrongLength`] for a position count
+    /// that does not match the obstacle.
     pub fn set_obstacle_motion(
         &mut self,
         t0: f64,
@@ -490,10 +519,7 @@ impl Simulator {
     ) -> Result<(), ClothError> {
         match &mut self.collisions.obstacle {
             Some(obstacle) => obstacle.set_motion(t0, start, t1, end),
-            None => Err(ClothError::BadValue {
-                what: "obstacle motion without an obstacle",
-                value: f64::NAN,
-            }),
+            None => Err(ClothError::NoObstacle),
         }
     }
 
@@ -565,12 +591,15 @@ impl Simulator {
     ) -> Result<(), ClothError> {
         match self.implicit_substep(state, h, report) {
             Ok(()) => Ok(()),
-            Err(reason) if depth >= self.settings.max_halvings => Err(ClothError::StepFailed {
-                time: state.time,
-                step: h,
-                reason,
-            }),
-            Err(_) => {
+            Err(SubstepError::Fatal(error)) => Err(error),
+            Err(SubstepError::Retry(reason)) if depth >= self.settings.max_halvings => {
+                Err(ClothError::StepFailed {
+                    time: state.time,
+                    step: h,
+                    reason,
+                })
+            }
+            Err(SubstepError::Retry(_)) => {
                 report.halvings += 1;
                 self.advance(state, 0.5 * h, depth + 1, report)?;
                 self.advance(state, 0.5 * h, depth + 1, report)
@@ -750,14 +779,13 @@ impl Simulator {
         state: &mut State,
         h: f64,
         report: &mut StepReport,
-    ) -> Result<(), StepFailure> {
+    ) -> Result<(), SubstepError> {
         let t1 = state.time + h;
         let w = &mut self.work;
         w.x0.copy_from_slice(&state.positions);
         w.v0.copy_from_slice(&state.velocities);
         self.collisions
-            .before_solve(&self.settings, state.time, h, &w.x0, &w.v0)
-            .map_err(|_| StepFailure::NonFinite)?;
+            .before_solve(&self.settings, state.time, h, &w.x0, &w.v0)?;
         self.prepare_filter(t1, h);
         self.prepare_base(h, state.previous.as_ref());
         let w = &mut self.work;
@@ -825,7 +853,7 @@ impl Simulator {
             && w.x.iter().all(|p| p.iter().all(|c| c.is_finite()))
             && w.trial.iter().all(|v| v.iter().all(|c| c.is_finite()));
         if !finite {
-            return Err(StepFailure::NonFinite);
+            return Err(StepFailure::NonFinite.into());
         }
         // Friction first, as a force of the integrator's own step (its impulses are the
         // solve's, and positions follow as x = x̂ + ĥ v): strain limiting and the collision
@@ -863,10 +891,7 @@ impl Simulator {
                 self.strain_limiter
                     .limit(&self.model.springs, limit, &mut motion, &w.floors);
         }
-        let repelled = self
-            .collisions
-            .repel(&self.settings, &mut motion)
-            .map_err(|_| StepFailure::NonFinite)?;
+        let repelled = self.collisions.repel(&self.settings, &mut motion)?;
         // Collision impulses stop features approaching at once, which strains the edges
         // around them: limit again after them, the cloth around taking up the slack.
         let (limiter, springs) = (&mut self.strain_limiter, &self.model.springs);
@@ -879,8 +904,7 @@ impl Simulator {
         relax(&mut motion, repelled);
         let impacts = self
             .collisions
-            .resolve(&self.settings, &mut motion, &mut relax)
-            .map_err(|_| StepFailure::NonFinite)?;
+            .resolve(&self.settings, &mut motion, &mut relax)?;
         // A vertex the passes left alone ends with the integrator's velocity; one they
         // changed (stopped by an impact, pushed, limited) with the velocity of its corrected
         // path, as backward Euler's would: the impulse that changed its path also took the
@@ -971,5 +995,22 @@ impl Simulator {
             + sum_by(mass.len(), &mut self.work.partials, |i| {
                 0.5 * mass[i] * v[i].norm_squared()
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_numeric_collision_errors_are_retried() {
+        let retried = |e| matches!(SubstepError::from(e), SubstepError::Retry(_));
+        assert!(retried(CollideError::NonFinitePosition { vertex: 3 }));
+        assert!(retried(CollideError::NonFiniteQuery { point: 1 }));
+        assert!(!retried(CollideError::Empty));
+        assert!(!retried(CollideError::PositionCount {
+            given: 3,
+            expected: 4
+        }));
     }
 }

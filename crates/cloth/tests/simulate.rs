@@ -402,3 +402,13 @@ fn a_restarted_simulator_computes_the_same_bits() {
         }
     }
 }
+
+#[test]
+fn moving_an_obstacle_that_was_never_set_is_its_own_error() {
+    let (mut sim, _) = curtain(3, Settings::default());
+    let points = [Point::origin(); 3];
+    assert_eq!(
+        sim.set_obstacle_motion(0.0, &points, FRAME, &points),
+        Err(ClothError::NoObstacle)
+    );
+}
