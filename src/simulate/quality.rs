@@ -314,6 +314,7 @@ mod tests {
             penetrating_vertices: 2,
             max_penetration: 0.01,
             self_intersecting_pairs: 0,
+            ..Findings::default()
         };
         let failures = assess(&stats, 0.1, &garment);
         assert_eq!(failures.len(), 2, "{failures:?}");
