@@ -29,7 +29,8 @@
 //! ```
 //!
 //! The bracketed fields are there only when the flag before them is 1. The deepest vertex
-//! and the crossing faces are on the refined surface, as `tailor check`'s test finds them.
+//! and the crossing faces are on the refined surface, as `tailor check`'s test finds them;
+//! the quality warnings map them to the garment at the end of the run, resumed or not.
 //!
 //! The fingerprint ([`crate::scene::Fingerprint`]) refuses a checkpoint of another scene,
 //! garment or body, naming the first key that changed; `[scene] frames` may change, so a
