@@ -1,6 +1,11 @@
 //! `tailor check`: quality control of a finished simulation. Per frame, the cloth vertices
 //! inside the body or closer to it than the thickness, the deepest of them, and the cloth's
 //! self-intersecting face pairs; a summary on standard output and optionally a JSON report.
+//! Counts say how bad a frame is, not where to look, so each frame also names its deepest
+//! vertex and its first crossing face pair (in ascending order, so the same mesh always names
+//! the same pair): here by the vertex's position (the reader numbers vertices in order of
+//! first use, not the file's) and the faces' order in the file; `tailor simulate` maps them
+//! back to the garment it simulated.
 //!
 //! Inside/outside uses the body's pseudo-normals (`tailor_collide::Hierarchy::signed_distances`)
 //! and needs a closed body; an open body is checked by distance only. Hierarchies are built for
@@ -41,7 +46,9 @@ pub struct Args {
     #[arg(long, default_value_t = 0.0, value_name = "T")]
     pub thickness: f64,
     /// Also write the report as JSON: `{"frames": [{"frame", "penetrating_vertices",
-    /// "max_penetration", "self_intersecting_pairs"}], "total": {…}}`.
+    /// "max_penetration", "deepest_point", "self_intersecting_pairs", "crossing_faces"}],
+    /// "total": {…}}` (the deepest vertex's position, and the first crossing pair as 0-based
+    /// faces in the file's order, when found).
     #[arg(long, value_name = "REPORT.json")]
     pub json: Option<PathBuf>,
 }
@@ -53,8 +60,12 @@ pub struct Findings {
     pub penetrating_vertices: usize,
     /// How far the deepest of them would have to move out to reach the thickness, m.
     pub max_penetration: f64,
+    /// The deepest of them (the lowest index of equals), a 0-based cloth vertex.
+    pub deepest_vertex: Option<u32>,
     /// Face pairs of the cloth that share no vertex and cross.
     pub self_intersecting_pairs: usize,
+    /// The first of them in ascending order, 0-based cloth faces, the lower first.
+    pub crossing_faces: Option<[u32; 2]>,
 }
 
 /// The findings of one frame: `cloth` and `body` refit at the frame's positions,
@@ -68,22 +79,30 @@ pub fn inspect(
     body: Option<&Hierarchy>,
     thickness: f64,
 ) -> Result<Findings> {
+    let crossing = cloth.self_intersections();
     let mut found = Findings {
-        self_intersecting_pairs: cloth.self_intersections().len(),
+        self_intersecting_pairs: crossing.len(),
+        crossing_faces: crossing.first().copied(),
         ..Findings::default()
     };
     if let Some(body) = body {
         let clearance = clearances(body, cloth_positions, thickness)?;
-        for gap in clearance.into_iter().filter(|&g| g < thickness) {
-            found.penetrating_vertices += 1;
-            found.max_penetration = found.max_penetration.max(thickness - gap);
+        for (v, gap) in clearance.into_iter().enumerate() {
+            if gap < thickness {
+                found.penetrating_vertices += 1;
+                let depth = thickness - gap;
+                if found.deepest_vertex.is_none() || depth > found.max_penetration {
+                    found.max_penetration = depth;
+                    found.deepest_vertex = Some(u32::try_from(v)?);
+                }
+            }
         }
     }
     Ok(found)
 }
 
 impl Findings {
-    /// The findings as a JSON object.
+    /// The counts as a JSON object.
     pub fn json(&self) -> serde_json::Value {
         json!({
             "penetrating_vertices": self.penetrating_vertices,
@@ -149,23 +168,43 @@ fn check(args: &Args) -> Result<bool> {
         };
         let found = inspect(cloth_h, &cloth_mesh.positions, body_h, args.thickness)
             .with_context(|| format!("checking {}", cloth_path.display()))?;
+        let deepest = found
+            .deepest_vertex
+            .and_then(|v| cloth_mesh.positions.get(v as usize))
+            .map(|p| [p.x, p.y, p.z]);
         total.penetrating_vertices += found.penetrating_vertices;
         total.max_penetration = total.max_penetration.max(found.max_penetration);
         total.self_intersecting_pairs += found.self_intersecting_pairs;
         if frames.len() > 1 {
-            println!("{}", line(&format!("frame {frame}"), &found));
+            println!("{}", line(&format!("frame {frame}"), &found, deepest));
         }
-        rows.push((*frame, found));
+        rows.push((*frame, found, deepest));
     }
+    // The total of one frame is that frame, places included; over several frames the places
+    // are on each frame's line.
+    let (total, deepest) = match rows.as_slice() {
+        [(_, only, deepest)] => (*only, *deepest),
+        _ => (total, None),
+    };
     println!(
         "{}",
-        line(&format!("{} frame(s) checked", frames.len()), &total)
+        line(
+            &format!("{} frame(s) checked", frames.len()),
+            &total,
+            deepest
+        )
     );
     if let Some(path) = &args.json {
         let report = json!({
-            "frames": rows.iter().map(|(frame, f)| {
+            "frames": rows.iter().map(|(frame, f, deepest)| {
                 let mut row = f.json();
                 row["frame"] = json!(frame);
+                if let Some(point) = deepest {
+                    row["deepest_point"] = json!(point);
+                }
+                if let Some(pair) = f.crossing_faces {
+                    row["crossing_faces"] = json!(pair);
+                }
                 row
             }).collect::<Vec<_>>(),
             "total": total.json(),
@@ -209,9 +248,17 @@ fn clearances(body: &Hierarchy, cloth: &[Point3<f64>], thickness: f64) -> Result
         .collect())
 }
 
-fn line(what: &str, f: &Findings) -> String {
+/// A summary line; a frame's names where its deepest vertex is and its first crossing pair.
+fn line(what: &str, f: &Findings, deepest: Option<[f64; 3]>) -> String {
+    let at = deepest.map_or(String::new(), |[x, y, z]| {
+        format!(" at ({x:.3}, {y:.3}, {z:.3})")
+    });
+    let first = f.crossing_faces.map_or(String::new(), |[a, b]| {
+        format!(" (first: faces {a} and {b})")
+    });
     format!(
-        "{what}: {} penetrating vertices (deepest {:.6} m), {} self-intersecting face pairs",
+        "{what}: {} penetrating vertices (deepest {:.6} m{at}), {} self-intersecting face \
+         pairs{first}",
         f.penetrating_vertices, f.max_penetration, f.self_intersecting_pairs
     )
 }

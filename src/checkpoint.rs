@@ -27,8 +27,13 @@
 //! vertices × (3 f64 position)  vertices × (3 f64 velocity)  vertices × (u8 carried contact)
 //! u8 previous (0 or 1), if 1: f64 step  vertices × (3 f64 position)  vertices × (3 f64 velocity)
 //! u32 rows  rows × (u32 frame, f64 ms, f64 strain, 2 u32 strained edge, u32 substeps, u32 cg,
-//!                   u64 penetrating, f64 deepest, u64 self-intersecting pairs)
+//!                   u64 penetrating, f64 deepest, u8 has deepest vertex, [u32 deepest vertex],
+//!                   u64 self-intersecting pairs, u8 has crossing faces, [2 u32 crossing faces])
 //! ```
+//!
+//! The bracketed fields are there only when the flag before them is 1. The deepest vertex
+//! and the crossing faces are on the refined surface, as `tailor check`'s test finds them;
+//! the quality warnings map them to the garment at the end of the run, resumed or not.
 //!
 //! The fingerprint ([`crate::scene::Fingerprint`]) refuses a checkpoint of another scene,
 //! garment or body, naming the first key that changed; `[scene] frames` may change, so a
@@ -48,7 +53,7 @@ use crate::output::write_atomically;
 use crate::scene::Fingerprint;
 
 const MAGIC: &[u8; 8] = b"TAILORCK";
-const VERSION: u32 = 4;
+const VERSION: u32 = 5;
 
 /// The checkpoint file in an output directory.
 #[must_use]
@@ -142,7 +147,18 @@ fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {
         w.write_all(&s.cg_iterations.to_le_bytes())?;
         w.write_all(&(f.penetrating_vertices as u64).to_le_bytes())?;
         w.write_all(&f.max_penetration.to_le_bytes())?;
+        write_optional(w, f.deepest_vertex.as_ref().map(std::slice::from_ref))?;
         w.write_all(&(f.self_intersecting_pairs as u64).to_le_bytes())?;
+        write_optional(w, f.crossing_faces.as_ref().map(|pair| pair.as_slice()))?;
+    }
+    Ok(())
+}
+
+/// A flag, then `values` when there are some.
+fn write_optional(w: &mut impl Write, values: Option<&[u32]>) -> io::Result<()> {
+    w.write_all(&[u8::from(values.is_some())])?;
+    for v in values.unwrap_or_default() {
+        w.write_all(&v.to_le_bytes())?;
     }
     Ok(())
 }
@@ -219,6 +235,26 @@ impl Reader<'_> {
     fn count(&mut self) -> Result<usize> {
         Ok(usize::try_from(self.u64()?)?)
     }
+
+    fn flag(&mut self) -> Result<bool> {
+        match self.take::<1>()? {
+            [0] => Ok(false),
+            [1] => Ok(true),
+            [x] => bail!("bad flag {x}"),
+        }
+    }
+
+    /// A flag, then `N` values when it is set (as [`write_optional`] writes them).
+    fn optional<const N: usize>(&mut self) -> Result<Option<[u32; N]>> {
+        if !self.flag()? {
+            return Ok(None);
+        }
+        let mut values = [0; N];
+        for v in &mut values {
+            *v = self.u32()?;
+        }
+        Ok(Some(values))
+    }
 }
 
 fn decode(bytes: &[u8]) -> Result<Checkpoint> {
@@ -248,25 +284,17 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
     let time = r.f64()?;
     let n = r.u32()? as usize;
     let (positions, velocities) = r.motion(n)?;
-    let carried_contacts = (0..n)
-        .map(|_| match r.take::<1>()? {
-            [0] => Ok(false),
-            [1] => Ok(true),
-            [x] => bail!("bad contact flag {x}"),
+    let carried_contacts = (0..n).map(|_| r.flag()).collect::<Result<_>>()?;
+    let previous = if r.flag()? {
+        let step = r.f64()?;
+        let (positions, velocities) = r.motion(n)?;
+        Some(Previous {
+            positions,
+            velocities,
+            step,
         })
-        .collect::<Result<_>>()?;
-    let previous = match r.take::<1>()? {
-        [0] => None,
-        [1] => {
-            let step = r.f64()?;
-            let (positions, velocities) = r.motion(n)?;
-            Some(Previous {
-                positions,
-                velocities,
-                step,
-            })
-        }
-        [x] => bail!("bad previous-state flag {x}"),
+    } else {
+        None
     };
     let rows = r.u32()?;
     let stats = (0..rows)
@@ -281,7 +309,9 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
                 findings: Findings {
                     penetrating_vertices: r.count()?,
                     max_penetration: r.f64()?,
+                    deepest_vertex: r.optional()?.map(|[v]| v),
                     self_intersecting_pairs: r.count()?,
+                    crossing_faces: r.optional()?,
                 },
             })
         })
@@ -326,19 +356,28 @@ mod tests {
                 }),
             },
             carried_contacts: vec![true, false],
-            stats: vec![FrameStats {
-                frame: 7,
-                ms: 12.5,
-                max_strain: 0.03,
-                strained_edge: [4, 1],
-                substeps: 5,
-                cg_iterations: 40,
-                findings: Findings {
-                    penetrating_vertices: 3,
-                    max_penetration: 0.001,
-                    self_intersecting_pairs: 1,
+            stats: vec![
+                FrameStats {
+                    frame: 6,
+                    ms: 11.0,
+                    ..FrameStats::default()
                 },
-            }],
+                FrameStats {
+                    frame: 7,
+                    ms: 12.5,
+                    max_strain: 0.03,
+                    strained_edge: [4, 1],
+                    substeps: 5,
+                    cg_iterations: 40,
+                    findings: Findings {
+                        penetrating_vertices: 3,
+                        max_penetration: 0.001,
+                        deepest_vertex: Some(u32::MAX),
+                        self_intersecting_pairs: 1,
+                        crossing_faces: Some([9, 0x0102_0304]),
+                    },
+                },
+            ],
         };
         let mut bytes = Vec::new();
         encode(&c, &mut bytes).unwrap();
@@ -346,6 +385,17 @@ mod tests {
         assert_eq!(back, c);
         assert!(back.state.velocities[0].y.is_sign_negative());
         assert!(decode(&bytes[..bytes.len() - 1]).is_err());
+        // The last byte before the last row's crossing faces is their flag.
+        let flag = bytes.len() - 9;
+        assert_eq!(bytes[flag], 1);
+        bytes[flag] = 2;
+        let error = decode(&bytes).unwrap_err().to_string();
+        assert!(error.contains("bad flag 2"), "{error}");
+        bytes[flag] = 0;
+        assert!(
+            decode(&bytes).is_err(),
+            "8 bytes too many without the faces"
+        );
         bytes[0] = b'X';
         assert!(decode(&bytes).is_err());
     }

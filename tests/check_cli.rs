@@ -1,6 +1,7 @@
 //! End-to-end tests of `tailor check`: a clean cloth exits 0, a penetrating or self-intersecting
-//! one exits 1 with hand-counted findings in the JSON report, and input that cannot be checked
-//! exits 2 with a message naming the file.
+//! one exits 1 with hand-counted findings in the JSON report (and where: the deepest vertex's
+//! position, the first crossing face pair), and input that cannot be checked exits 2 with a
+//! message naming the file.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -55,7 +56,8 @@ fn clean_sheet() -> String {
 }
 
 /// At height 0.9 over x ∈ {0.2, 0.6, 1.4}, y ∈ {0.3, 0.5, 1.7}: the four vertices with x < 1
-/// and y < 1 are inside the cube, each 0.1 below its top face, nearer than any side.
+/// and y < 1 are inside the cube, each 0.1 below its top face, nearer than any side; of equals
+/// the first read, (0.2, 0.3, 0.9), is the deepest.
 fn sunk_sheet() -> String {
     sheet([0.2, 0.6, 1.4], [0.3, 0.5, 1.7], 0.9)
 }
@@ -90,6 +92,8 @@ fn clean_cloth_exits_0() {
     assert_eq!(r["total"]["penetrating_vertices"], 0);
     assert_eq!(r["total"]["self_intersecting_pairs"], 0);
     assert_eq!(r["frames"].as_array().unwrap().len(), 1);
+    assert!(r["frames"][0].get("deepest_point").is_none());
+    assert!(r["frames"][0].get("crossing_faces").is_none());
 }
 
 #[test]
@@ -102,13 +106,21 @@ fn penetrating_cloth_exits_1_with_counts() {
     assert_eq!(r["total"]["penetrating_vertices"], 4);
     assert!((r["total"]["max_penetration"].as_f64().unwrap() - 0.1).abs() < 1e-12);
     assert_eq!(r["frames"][0]["penetrating_vertices"], 4);
+    assert_eq!(
+        r["frames"][0]["deepest_point"],
+        serde_json::json!([0.2, 0.3, 0.9])
+    );
     // A clearance of 0.05 adds to the depth but catches no outside vertex (the nearest is
     // 0.4 away).
     let r = report(&dir, &args, &["--thickness", "0.05"], 1);
     assert_eq!(r["total"]["penetrating_vertices"], 4);
     assert!((r["total"]["max_penetration"].as_f64().unwrap() - 0.15).abs() < 1e-12);
     let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
-    assert!(String::from_utf8_lossy(&out.stdout).contains("4 penetrating vertices"));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("4 penetrating vertices (deepest 0.100000 m at (0.200, 0.300, 0.900))"),
+        "{stdout}"
+    );
 }
 
 #[test]
@@ -118,6 +130,13 @@ fn self_intersecting_cloth_exits_1() {
     let r = report(&dir, &[&cloth], &[], 1);
     assert_eq!(r["total"]["self_intersecting_pairs"], 1);
     assert_eq!(r["total"]["penetrating_vertices"], 0);
+    assert_eq!(r["frames"][0]["crossing_faces"], serde_json::json!([0, 1]));
+    let out = tailor(&[cloth.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("1 self-intersecting face pairs (first: faces 0 and 1)"),
+        "{stdout}"
+    );
 }
 
 #[test]

@@ -13,6 +13,9 @@
 //! - A shot whose cloth is torn past its strain limit says so (a warning naming the frames and
 //!   the group, `failures` in `summary.json`) and, with `--strict` or `[scene] strict = true`,
 //!   exits 3 once every file is written; a clean shot warns of nothing and passes `--strict`.
+//! - A shot whose cloth lies in the body and through itself says where on the garment (the
+//!   group of the control vertex or faces the refined surface's findings map to), in the
+//!   warning and in `summary.json`, resumed or not.
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -579,4 +582,76 @@ fn clean_shot_warns_of_nothing_and_passes_strict() {
     assert_eq!(out.status.code(), Some(0), "{stderr}");
     assert!(stderr.is_empty(), "{stderr}");
     assert_eq!(summary(&dir.join("out"))["failures"], serde_json::json!({}));
+}
+
+/// The shot's sheet lowered into the cube (y = 0.9, its back rows 0.1 under the top) with a
+/// quad `flap` standing through its overhang (x 0.3-0.7 at z = 1.2, y 0.7-1.1), every vertex
+/// pinned so that no collision can move the cloth out: every frame penetrates and crosses
+/// where the rest pose does.
+fn pierced(dir: &Path, frames: u32) -> PathBuf {
+    let count = format!("frames = {frames}");
+    let scene = shot(
+        dir,
+        &[
+            ("frames = 10", &count),
+            ("pins = []", "pins = [\"sheet\", \"flap\"]"),
+            ("attach = [\"top\"]", "attach = []"),
+        ],
+    );
+    let flap = "v 0.3 0.7 1.2\nv 0.7 0.7 1.2\nv 0.7 1.1 1.2\nv 0.3 1.1 1.2\n\
+                g flap\nf 37/1 38/2 39/8 40/7\n";
+    let sheet = sheet().replace(" 1.1 ", " 0.9 ") + flap;
+    fs::write(dir.join("sheet.obj"), sheet).unwrap();
+    scene
+}
+
+#[test]
+fn penetrating_and_crossing_shot_names_the_places() {
+    let dir = scratch("pierced");
+    let scene = pierced(&dir, 2);
+    let scene = scene.to_str().unwrap();
+    let whole = dir.join("whole");
+    let out = run_ok(&[scene, "--out", whole.to_str().unwrap(), "--quiet"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let report = summary(&whole);
+    let failures = &report["failures"];
+    let penetration = &failures["penetration"];
+    assert_eq!(
+        penetration["frames"],
+        serde_json::json!([0, 1, 2]),
+        "{report}"
+    );
+    assert_eq!(
+        penetration["groups"],
+        serde_json::json!(["top"]),
+        "{report}"
+    );
+    let vertex = penetration["worst_vertex"].as_u64().unwrap();
+    assert!(vertex < 12, "vertex {vertex} is not in the rows of top");
+    let crossing = &failures["self_intersection"];
+    assert_eq!(crossing["frames"], serde_json::json!([0, 1, 2]), "{report}");
+    assert_eq!(
+        crossing["groups"],
+        serde_json::json!(["sheet", "flap"]),
+        "{report}"
+    );
+    let faces = crossing["worst_faces"].as_array().unwrap();
+    assert!((20..25).contains(&faces[0].as_u64().unwrap()), "{report}");
+    assert_eq!(faces[1], 25, "{report}");
+    for part in [
+        "warning: cloth inside the body or within its thickness in frames 0-2 (".to_owned(),
+        format!(", vertex {vertex}) in group \"top\""),
+        "warning: the cloth intersects itself in frames 0-2 (".to_owned(),
+        format!(", faces {} and 25) in groups \"sheet\", \"flap\"", faces[0]),
+    ] {
+        assert!(stderr.contains(&part), "{part:?} not in {stderr:?}");
+    }
+
+    // Resumed, frames 0 and 1 are judged from the checkpoint and name the same places.
+    let parts = dir.join("parts");
+    let parts_s = parts.to_str().unwrap();
+    run_ok(&[scene, "--out", parts_s, "--stop-after", "1", "--quiet"]);
+    let out = run_ok(&[scene, "--out", parts_s, "--resume", "--quiet"]);
+    assert_eq!(summary(&parts)["failures"], *failures);
+    assert_eq!(String::from_utf8_lossy(&out.stderr), stderr);
 }

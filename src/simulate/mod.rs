@@ -60,7 +60,7 @@ body), frame 0 being the rest pose; then summary.json. A checkpoint (tailor_chec
 written after every frame for --resume. A frame fails its quality when an edge ends it more \
 than 1 percentage point past the scene's strain_limit (a 10% limit fails above 11%; not judged \
 when the limit is 0) or tailor check's test finds a penetration or a self-intersection; each \
-failure is warned about on standard error (frames, worst value, garment group) and listed \
+failure is warned about on standard error (frames, worst value, where on the garment) and listed \
 under \"failures\" in summary.json. Exit status: 0 done (warnings or not), 1 bad scene or a \
 diverging simulation, 2 bad arguments, 3 with --strict or [scene] strict = true when a frame \
 failed its quality (everything is written first)."
@@ -254,7 +254,12 @@ fn simulate(args: &Args) -> Result<Outcome> {
         }
     }
     progress.finish_and_clear();
-    let failures = quality::assess(&stats, scene.cloth.strain_limit, &scene.cloth.doc);
+    let failures = quality::assess(
+        &stats,
+        scene.cloth.strain_limit,
+        &scene.cloth.doc,
+        &shot.cloth,
+    );
     summary::report(&scene.path, &dir, scene.cloth.thickness, &stats, &failures)?;
     println!(
         "frames {first} to {last}: {}",

@@ -2,15 +2,22 @@
 //! leaves it in the body or through itself, still writes every frame; without a judgement at
 //! the end it would finish exactly like a good one, and a pipeline would publish it. So the
 //! figures already kept for every frame ([`FrameStats`]) are judged, and each kind of failure
-//! is reported once, with its frames as compact ranges ("12-19, 33"), its worst value and,
-//! for strain, where on the garment it happened:
+//! is reported once, with its frames as compact ranges ("12-19, 33"), its worst value and
+//! where on the garment it happened, since a frame number alone leaves the artist searching
+//! the whole garment for what to fix:
 //!
 //! - strain: the frame ends with an edge more than [`STRAIN_TOLERANCE`] past the scene's
 //!   `strain_limit`. Not judged when the limit is 0 (limiting off: any strain is allowed).
-//!   The place is the garment group holding each failing frame's worst edge (the smallest
-//!   such group, the most specific name), or, for edges in no group, their vertices.
+//!   Each failing frame's spot is its worst edge.
 //! - penetration and self-intersection: `tailor check`'s test, run on every frame's written
-//!   surface, finds anything at all.
+//!   surface, finds anything at all. The test finds them on the refined surface, which the
+//!   artist does not edit, so each failing frame's spot is mapped back to the control mesh
+//!   ([`Surface`]): the deepest penetrating vertex to the control vertex it follows most, the
+//!   first crossing face pair to the control faces they lie in.
+//!
+//! All three then name their spots alike: the garment group holding each failing frame's
+//! spot (the smallest such group, the most specific name), or, for spots in no group, their
+//! vertices.
 //!
 //! The caller prints [`Failure`]s as warnings, puts [`json`] in `summary.json`, and decides
 //! the exit status (`--strict`).
@@ -20,6 +27,7 @@ use std::fmt;
 use serde_json::{Map, Value, json};
 use tailor_subdiv::obj::ObjDocument;
 
+use super::surface::Surface;
 use crate::checkpoint::FrameStats;
 
 /// How far past `strain_limit` an edge may end a frame before the frame fails: one
@@ -56,7 +64,35 @@ impl Kind {
     }
 }
 
-/// Where on the garment the worst edges of the failing frames lie.
+/// Where on the garment's control mesh a frame failed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Spot {
+    /// The most strained edge, by its vertices.
+    Edge([u32; 2]),
+    /// The control vertex the deepest penetrating refined vertex follows most.
+    Vertex(u32),
+    /// The control faces of the first crossing refined face pair (the same face twice when
+    /// both lie in one).
+    Faces([u32; 2]),
+}
+
+impl Spot {
+    /// The vertex sets that name the spot: each lies in a group when a face of the group
+    /// holds all of it (an edge's ends, a vertex, each face's corners).
+    fn parts<'a>(&'a self, garment: &'a ObjDocument) -> Vec<&'a [u32]> {
+        match self {
+            Self::Edge(edge) => vec![edge],
+            Self::Vertex(v) => vec![std::slice::from_ref(v)],
+            Self::Faces(faces) => faces
+                .iter()
+                .filter(|&&f| (f as usize) < garment.mesh.face_count())
+                .map(|&f| garment.mesh.face(f as usize))
+                .collect(),
+        }
+    }
+}
+
+/// Where on the garment the spots of the failing frames lie.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Region {
     /// Groups holding them, in the order of the frames.
@@ -78,74 +114,86 @@ pub struct Failure {
     pub worst_frame: u32,
     /// The worst value: strain, deepest penetration (m), or crossing face pairs.
     pub worst: f64,
-    /// Strain only: the worst frame's worst edge, and where the failing frames' lie.
-    pub place: Option<([u32; 2], Region)>,
+    /// The worst frame's spot, and where the failing frames' lie; `None` when the worst
+    /// frame has no spot.
+    pub place: Option<(Spot, Region)>,
 }
 
 /// Judges every frame of `stats` against the scene's `strain_limit` (0: not judged) and
-/// `tailor check`'s test; `garment` names the places.
-pub fn assess(stats: &[FrameStats], strain_limit: f64, garment: &ObjDocument) -> Vec<Failure> {
-    let threshold = strain_limit + STRAIN_TOLERANCE;
-    let strained = |s: &FrameStats| (s.max_strain > threshold).then_some(s.max_strain);
+/// `tailor check`'s test; `garment` names the places, `surface` (the garment's written
+/// surface) maps the test's findings back to it.
+pub fn assess(
+    stats: &[FrameStats],
+    strain_limit: f64,
+    garment: &ObjDocument,
+    surface: &Surface,
+) -> Vec<Failure> {
     let mut failures = Vec::new();
-    if strain_limit > 0.0
-        && let Some(mut failure) = judge(
-            Kind::Strain {
-                limit: strain_limit,
-            },
-            stats,
-            strained,
-        )
-    {
-        let rows = stats.iter().filter(|s| strained(s).is_some());
-        let worst = rows.clone().find(|s| s.frame == failure.worst_frame);
-        let edge = worst.map_or([0, 0], |s| s.strained_edge);
-        failure.place = Some((edge, region(garment, rows.map(|s| s.strained_edge))));
-        failures.push(failure);
+    if strain_limit > 0.0 {
+        let threshold = strain_limit + STRAIN_TOLERANCE;
+        let kind = Kind::Strain {
+            limit: strain_limit,
+        };
+        failures.extend(judge(kind, stats, garment, |s| {
+            (s.max_strain > threshold).then_some((s.max_strain, Some(Spot::Edge(s.strained_edge))))
+        }));
     }
-    failures.extend(judge(Kind::Penetration, stats, |s| {
-        (s.findings.penetrating_vertices > 0).then_some(s.findings.max_penetration)
+    failures.extend(judge(Kind::Penetration, stats, garment, |s| {
+        let found = &s.findings;
+        let spot = found.deepest_vertex.and_then(|v| surface.control_vertex(v));
+        (found.penetrating_vertices > 0).then_some((found.max_penetration, spot.map(Spot::Vertex)))
     }));
-    failures.extend(judge(Kind::SelfIntersection, stats, |s| {
-        let pairs = s.findings.self_intersecting_pairs;
-        (pairs > 0).then_some(pairs as f64)
+    failures.extend(judge(Kind::SelfIntersection, stats, garment, |s| {
+        let found = &s.findings;
+        let spot = found.crossing_faces.and_then(|[a, b]| {
+            Some(Spot::Faces([
+                surface.control_face(a)?,
+                surface.control_face(b)?,
+            ]))
+        });
+        let pairs = found.self_intersecting_pairs;
+        (pairs > 0).then_some((pairs as f64, spot))
     }));
     failures
 }
 
-/// The failure of `kind` over `stats`, if any frame fails: `value` is the frame's figure
-/// when it fails.
+/// The failure of `kind` over `stats`, if any frame fails: `value` is the frame's figure and
+/// spot when it fails.
 fn judge(
     kind: Kind,
     stats: &[FrameStats],
-    value: impl Fn(&FrameStats) -> Option<f64>,
+    garment: &ObjDocument,
+    value: impl Fn(&FrameStats) -> Option<(f64, Option<Spot>)>,
 ) -> Option<Failure> {
-    let failing: Vec<(u32, f64)> = stats
+    let failing: Vec<(u32, f64, Option<Spot>)> = stats
         .iter()
-        .filter_map(|s| value(s).map(|v| (s.frame, v)))
+        .filter_map(|s| value(s).map(|(v, spot)| (s.frame, v, spot)))
         .collect();
-    let &(worst_frame, worst) = failing
+    let &(worst_frame, worst, spot) = failing
         .iter()
         .reduce(|a, b| if b.1 > a.1 { b } else { a })?;
+    let spots = failing.iter().filter_map(|&(_, _, spot)| spot);
     Some(Failure {
         kind,
-        frames: failing.iter().map(|&(frame, _)| frame).collect(),
+        frames: failing.iter().map(|&(frame, _, _)| frame).collect(),
         worst_frame,
         worst,
-        place: None,
+        place: spot.map(|spot| (spot, region(garment, spots))),
     })
 }
 
-/// Where `edges` lie on the garment.
-fn region(garment: &ObjDocument, edges: impl Iterator<Item = [u32; 2]>) -> Region {
+/// Where `spots` lie on the garment.
+fn region(garment: &ObjDocument, spots: impl Iterator<Item = Spot>) -> Region {
     let mut found = Region::default();
-    for edge in edges {
-        match group_of(garment, edge) {
-            Some(name) if !found.groups.iter().any(|g| g == name) => {
-                found.groups.push(name.to_owned());
+    for spot in spots {
+        for part in spot.parts(garment) {
+            match group_of(garment, part) {
+                Some(name) if !found.groups.iter().any(|g| g == name) => {
+                    found.groups.push(name.to_owned());
+                }
+                Some(_) => {}
+                None => found.vertices.extend(part),
             }
-            Some(_) => {}
-            None => found.vertices.extend(edge),
         }
     }
     found.vertices.sort_unstable();
@@ -157,15 +205,15 @@ fn region(garment: &ObjDocument, edges: impl Iterator<Item = [u32; 2]>) -> Regio
     found
 }
 
-/// The smallest group of the garment with a face holding both ends of `edge`, if any.
-fn group_of(garment: &ObjDocument, [a, b]: [u32; 2]) -> Option<&str> {
+/// The smallest group of the garment with a face holding all of `vertices`, if any.
+fn group_of<'a>(garment: &'a ObjDocument, vertices: &[u32]) -> Option<&'a str> {
     garment
         .groups
         .iter()
         .filter(|g| {
             g.faces.iter().any(|&f| {
                 let face = garment.mesh.face(f as usize);
-                face.contains(&a) && face.contains(&b)
+                vertices.iter().all(|v| face.contains(v))
             })
         })
         .min_by_key(|g| g.faces.len())
@@ -221,10 +269,15 @@ impl fmt::Display for Failure {
                 self.worst
             )?,
         }
-        let Some(([a, b], region)) = &self.place else {
+        let Some((spot, region)) = &self.place else {
             return write!(f, ")");
         };
-        write!(f, ", edge {a}-{b})")?;
+        match spot {
+            Spot::Edge([a, b]) => write!(f, ", edge {a}-{b})")?,
+            Spot::Vertex(v) => write!(f, ", vertex {v})")?,
+            Spot::Faces([a, b]) if a == b => write!(f, ", face {a})")?,
+            Spot::Faces([a, b]) => write!(f, ", faces {a} and {b})")?,
+        }
         let names: Vec<String> = region.groups.iter().map(|g| format!("{g:?}")).collect();
         match names.len() {
             0 => {}
@@ -241,8 +294,13 @@ impl fmt::Display for Failure {
             let more = region.vertices.len().saturating_sub(VERTICES_SHOWN);
             write!(
                 f,
-                "{} at vertices {}{} (in no group; vertex {first} rests at ({x:.3}, {y:.3}, {z:.3}))",
+                "{} at {} {}{} (in no group; vertex {first} rests at ({x:.3}, {y:.3}, {z:.3}))",
                 if names.is_empty() { "" } else { " and" },
+                if region.vertices.len() == 1 {
+                    "vertex"
+                } else {
+                    "vertices"
+                },
                 shown.join(", "),
                 if more > 0 {
                     format!(" and {more} more")
@@ -256,7 +314,9 @@ impl fmt::Display for Failure {
 }
 
 /// `summary.json`'s `failures`: an object with a key per kind that failed (`strain`,
-/// `penetration`, `self_intersection`), empty for a clean run.
+/// `penetration`, `self_intersection`), empty for a clean run. Each names its worst frame's
+/// spot (`worst_edge`, `worst_vertex` or `worst_faces`, control mesh indices) and the
+/// failing frames' `groups` and `ungrouped_vertices`.
 pub fn json(failures: &[Failure]) -> Value {
     let mut all = Map::new();
     for failure in failures {
@@ -270,8 +330,12 @@ pub fn json(failures: &[Failure]) -> Value {
             entry["strain_limit"] = json!(limit);
             entry["threshold"] = json!(limit + STRAIN_TOLERANCE);
         }
-        if let Some((edge, region)) = &failure.place {
-            entry["worst_edge"] = json!(edge);
+        if let Some((spot, region)) = &failure.place {
+            match spot {
+                Spot::Edge(edge) => entry["worst_edge"] = json!(edge),
+                Spot::Vertex(v) => entry["worst_vertex"] = json!(v),
+                Spot::Faces(faces) => entry["worst_faces"] = json!(faces),
+            }
             entry["groups"] = json!(region.groups);
             entry["ungrouped_vertices"] = json!(region.vertices);
         }
@@ -294,15 +358,41 @@ mod tests {
         }
     }
 
-    #[test]
-    fn failures_name_frames_values_and_places() {
-        // Two quads side by side: the left one in group "panel", the right one in none.
+    /// Two quads side by side: face 0 (vertices 1, 2, 5, 4) in no group, face 1 (vertices
+    /// 0, 1, 4, 3) in group "panel"; and its surface at level 1, whose faces 0-3 lie in face
+    /// 0 and 4-7 in face 1, and whose vertices 0-5 follow their own vertex, 6 (face 0's face
+    /// point) vertex 1 and 7 (face 1's) vertex 0.
+    fn strip() -> (ObjDocument, Surface) {
         let garment = tailor_subdiv::obj::parse(
             "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\n\
              f 2 3 6 5\ng panel\nf 1 2 5 4\n",
             "strip.obj",
         )
         .unwrap();
+        let surface = Surface::new(&garment.mesh, 1, false).unwrap();
+        (garment, surface)
+    }
+
+    fn found(deepest: Option<(u32, f64)>, crossing: Option<[u32; 2]>) -> Findings {
+        Findings {
+            penetrating_vertices: usize::from(deepest.is_some()),
+            max_penetration: deepest.map_or(0.0, |d| d.1),
+            deepest_vertex: deepest.map(|d| d.0),
+            self_intersecting_pairs: usize::from(crossing.is_some()),
+            crossing_faces: crossing,
+        }
+    }
+
+    fn warns(failure: &Failure, parts: &[&str]) {
+        let warning = failure.to_string();
+        for part in parts {
+            assert!(warning.contains(part), "{part:?} not in {warning:?}");
+        }
+    }
+
+    #[test]
+    fn failures_name_frames_values_and_places() {
+        let (garment, surface) = strip();
         let mut stats = vec![
             row(0, 0.0, [0, 1]),
             row(1, 0.5, [0, 3]),
@@ -310,36 +400,77 @@ mod tests {
             row(3, 0.3, [2, 5]),
             row(4, 0.111, [1, 4]),
         ];
-        stats[2].findings = Findings {
-            penetrating_vertices: 2,
-            max_penetration: 0.01,
-            self_intersecting_pairs: 0,
-        };
-        let failures = assess(&stats, 0.1, &garment);
-        assert_eq!(failures.len(), 2, "{failures:?}");
+        stats[2].findings = found(Some((2, 0.01)), Some([0, 3]));
+        stats[4].findings = found(Some((7, 0.02)), None);
+        stats[3].findings = found(None, Some([1, 5]));
+        stats[3].findings.self_intersecting_pairs = 2;
+        let failures = assess(&stats, 0.1, &garment, &surface);
+        assert_eq!(failures.len(), 3, "{failures:?}");
         let strain = &failures[0];
         assert_eq!(strain.frames, [1, 3, 4]);
         assert_eq!((strain.worst_frame, strain.worst), (1, 0.5));
-        let (edge, region) = strain.place.as_ref().unwrap();
-        assert_eq!(*edge, [0, 3]);
+        let (spot, region) = strain.place.as_ref().unwrap();
+        assert_eq!(*spot, Spot::Edge([0, 3]));
         assert_eq!(region.groups, ["panel"]);
         assert_eq!(region.vertices, [2, 5]);
-        let warning = strain.to_string();
-        for part in [
-            "frames 1, 3-4",
-            "worst 50.0% at frame 1, edge 0-3",
-            "in group \"panel\" and at vertices 2, 5",
-            "vertex 2 rests at (2.000, 0.000, 0.000)",
-        ] {
-            assert!(warning.contains(part), "{part:?} not in {warning:?}");
-        }
-        assert_eq!(failures[1].kind, Kind::Penetration);
-        assert_eq!(failures[1].frames, [2]);
+        warns(
+            strain,
+            &[
+                "frames 1, 3-4",
+                "worst 50.0% at frame 1, edge 0-3",
+                "in group \"panel\" and at vertices 2, 5",
+                "vertex 2 rests at (2.000, 0.000, 0.000)",
+            ],
+        );
+        // Refined vertex 7 follows vertex 0 (in "panel"), refined vertex 2 vertex 2 (in no
+        // group).
+        let penetration = &failures[1];
+        assert_eq!(penetration.kind, Kind::Penetration);
+        assert_eq!(penetration.frames, [2, 4]);
+        let (spot, region) = penetration.place.as_ref().unwrap();
+        assert_eq!(*spot, Spot::Vertex(0));
+        assert_eq!(
+            (region.groups.as_slice(), region.vertices.as_slice()),
+            (&["panel".to_owned()][..], &[2][..])
+        );
+        warns(
+            penetration,
+            &[
+                "deepest 0.0200 m at frame 4, vertex 0) in group \"panel\" and at vertex 2 (",
+                "vertex 2 rests at (2.000, 0.000, 0.000)",
+            ],
+        );
+        // Refined faces 1 and 5 lie in faces 0 and 1, refined faces 0 and 3 both in face 0;
+        // the worst frame (3, two pairs) names its pair.
+        let crossing = &failures[2];
+        assert_eq!(crossing.kind, Kind::SelfIntersection);
+        assert_eq!(crossing.frames, [2, 3]);
+        let (spot, region) = crossing.place.as_ref().unwrap();
+        assert_eq!(*spot, Spot::Faces([0, 1]));
+        assert_eq!(region.groups, ["panel"]);
+        assert_eq!(region.vertices, [1, 2, 4, 5]);
+        warns(
+            crossing,
+            &["at frame 3, faces 0 and 1) in group \"panel\" and at vertices 1, 2, 4, 5 ("],
+        );
+        stats[3].findings.self_intersecting_pairs = 1;
+        let first = assess(&stats, 0.1, &garment, &surface);
+        assert_eq!(first[2].place.as_ref().unwrap().0, Spot::Faces([0, 0]));
+        warns(
+            &first[2],
+            &["at frame 2, face 0) in group \"panel\" and at vertices 1, 2, 4, 5 ("],
+        );
+
         let summary = json(&failures);
         assert_eq!(summary["strain"]["frame_ranges"], "1, 3-4");
-        assert_eq!(summary["penetration"]["worst"], 0.01);
+        assert_eq!(summary["strain"]["worst_edge"], json!([0, 3]));
+        assert_eq!(summary["penetration"]["worst"], 0.02);
+        assert_eq!(summary["penetration"]["worst_vertex"], 0);
+        assert_eq!(summary["penetration"]["groups"], json!(["panel"]));
+        assert_eq!(summary["penetration"]["ungrouped_vertices"], json!([2]));
+        assert_eq!(summary["self_intersection"]["worst_faces"], json!([0, 1]));
         // Limiting off: strain is not judged.
-        assert_eq!(assess(&stats, 0.0, &garment).len(), 1);
+        assert_eq!(assess(&stats, 0.0, &garment, &surface).len(), 2);
         assert_eq!(json(&[]), json!({}));
     }
 

@@ -8,6 +8,11 @@
 //! garments in `assets/` are modelled against (1–2 cm off it, `assets/README.md`). Level 1
 //! is a quarter of the work but lies further from the limit surface a renderer shows, so cloth
 //! resting on it would float off (or sink into) the rendered body where it curves.
+//!
+//! What `tailor check`'s test finds on the garment's refined surface is fixed on its control
+//! mesh, so a surface also says which control vertex a refined vertex follows most (its
+//! stencil's largest weight) and which control face a refined face lies in (from the order in
+//! which uniform refinement numbers its faces).
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -27,6 +32,9 @@ pub struct Surface {
     tangents: Option<[StencilTable; 2]>,
     mesh: Mesh,
     hierarchy: Hierarchy,
+    /// The control mesh's face offsets ([`Mesh::face_offsets`]), for [`Self::control_face`].
+    control_faces: Vec<u32>,
+    level: u32,
 }
 
 impl Surface {
@@ -55,7 +63,44 @@ impl Surface {
             tangents,
             mesh,
             hierarchy,
+            control_faces: control.face_offsets().to_vec(),
+            level,
         })
+    }
+
+    /// The control vertex with the largest weight in refined vertex `v`'s stencil (the lowest
+    /// index of equals, as for the face point of a quad); `None` when there is no vertex `v`.
+    #[must_use]
+    pub fn control_vertex(&self, v: u32) -> Option<u32> {
+        let v = v as usize;
+        if v >= self.stencils.len() {
+            return None;
+        }
+        let (columns, weights) = self.stencils.rows.row(v);
+        let heaviest = columns.iter().zip(weights).reduce(|best, next| {
+            let better = next.1 > best.1 || (next.1 == best.1 && next.0 < best.0);
+            if better { next } else { best }
+        });
+        heaviest.map(|(&c, _)| c)
+    }
+
+    /// The control face that refined face `f` lies in; `None` when there is no face `f`.
+    ///
+    /// Uniform refinement numbers child faces parent by parent (`tailor_subdiv::refine`):
+    /// level 1 makes one quad per corner of each control face, so its face `k` lies in the
+    /// control face holding corner `k`; every later level makes four consecutive quads per
+    /// face, so face `f` of level `l` lies in face `f / 4^(l − 1)` of level 1.
+    #[must_use]
+    pub fn control_face(&self, f: u32) -> Option<u32> {
+        if f as usize >= self.mesh.face_count() {
+            return None;
+        }
+        if self.level == 0 {
+            return Some(f);
+        }
+        let corner = f.checked_shr(2 * (self.level - 1)).unwrap_or(0);
+        let after = self.control_faces.partition_point(|&o| o <= corner);
+        u32::try_from(after.checked_sub(1)?).ok()
     }
 
     /// The stencils of the refined points over the control points.
@@ -152,6 +197,70 @@ pub fn write_with_groups(mesh: &Mesh, groups: &[Group], out: &mut impl Write) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A unit quad (vertices 0-3) and a triangle (1, 4, 2) on its right, sharing edge 1-2.
+    fn quad_and_triangle(level: u32) -> Surface {
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0.5 0\nf 1 2 3 4\nf 2 5 3\n";
+        let doc = obj::parse(text, "t.obj").unwrap();
+        Surface::new(&doc.mesh, level, false).unwrap()
+    }
+
+    #[test]
+    fn refined_faces_lie_in_their_control_faces() {
+        // Level 1: one quad per corner, the quad's 4 then the triangle's 3; each holds its
+        // parent's face point (refined vertices 5 and 6, after the 5 vertex points).
+        let one = quad_and_triangle(1);
+        let parents: Vec<_> = (0..8).map(|f| one.control_face(f)).collect();
+        assert_eq!(parents[..7], [0, 0, 0, 0, 1, 1, 1].map(Some));
+        assert_eq!(parents[7], None);
+        for f in 0..7 {
+            let face_point = 5 + one.control_face(f).unwrap();
+            assert!(
+                one.mesh().face(f as usize).contains(&face_point),
+                "face {f}"
+            );
+        }
+        // Level 2: four per level-1 face; each holds its level-1 parent's face point (after
+        // the 13 vertex points: 5 vertices, 2 faces and 6 edges of the control mesh).
+        let two = quad_and_triangle(2);
+        assert_eq!(two.control_face(15), Some(0));
+        assert_eq!(two.control_face(16), Some(1));
+        assert_eq!(two.control_face(27), Some(1));
+        assert_eq!(two.control_face(28), None);
+        for f in 0..28 {
+            let parent = f / 4;
+            assert!(
+                two.mesh().face(f as usize).contains(&(13 + parent)),
+                "face {f}"
+            );
+            assert_eq!(two.control_face(f), one.control_face(parent), "face {f}");
+        }
+        // Level 0: the control faces themselves.
+        let zero = quad_and_triangle(0);
+        assert_eq!(
+            (zero.control_face(1), zero.control_face(2)),
+            (Some(1), None)
+        );
+    }
+
+    #[test]
+    fn refined_vertices_follow_their_heaviest_control_vertex() {
+        let one = quad_and_triangle(1);
+        // Vertex points weigh their own vertex most (3/4 on a smooth boundary).
+        for v in 0..5 {
+            assert_eq!(one.control_vertex(v), Some(v));
+        }
+        // Face points weigh their corners alike: the lowest wins.
+        assert_eq!(one.control_vertex(5), Some(0));
+        assert_eq!(one.control_vertex(6), Some(1));
+        assert_eq!(one.control_vertex(13), None);
+        // At level 2 the face point of the level-1 quad at corner j of a control face weighs
+        // that corner most (about 1/2, the other corners 7/32 or less): refined vertex 13 + k
+        // for level-1 face k, the quad's corners 0-3 then the triangle's 1, 4, 2.
+        let two = quad_and_triangle(2);
+        let corners: Vec<_> = (13..20).map(|v| two.control_vertex(v)).collect();
+        assert_eq!(corners, [0, 1, 2, 3, 1, 4, 2].map(Some));
+    }
 
     #[test]
     fn groups_survive_a_round_trip() {
