@@ -114,7 +114,9 @@ pub enum Integrator {
     BackwardEuler,
 }
 
-/// How the simulator steps.
+/// How the simulator steps. The defaults are the library's (two substeps a frame at 24 fps,
+/// no self-collision); a `tailor` scene has its own (five, self-collision on), for the
+/// reasons the README's Decisions give.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
     /// Longest substep, seconds (default 1/48: 2 substeps per frame at 24 fps).
