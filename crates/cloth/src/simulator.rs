@@ -278,6 +278,10 @@ struct Work {
     base: Vec<Point>,
     base_velocity: Vec<Vec3>,
     base_step: f64,
+    /// Where the dampers' directions are taken (Baraff & Witkin §5.2 freeze them over the
+    /// substep): x₀ for backward Euler, first order like it; the predicted end x̂ + ĥ v̂ for
+    /// BDF2, whose order they would otherwise cap at one.
+    frozen: Vec<Point>,
     x: Vec<Point>,
     v: Vec<Vec3>,
     trial: Vec<Vec3>,
@@ -377,6 +381,7 @@ impl Simulator {
                 base: vec![Point::origin(); n],
                 base_velocity: vec![Vec3::zeros(); n],
                 base_step: 0.0,
+                frozen: vec![Point::origin(); n],
                 x: vec![Point::origin(); n],
                 v: vec![Vec3::zeros(); n],
                 trial: vec![Vec3::zeros(); n],
@@ -615,7 +620,7 @@ impl Simulator {
         let env = self.settings.environment();
         self.work.place_at_trial();
         let Work {
-            x0,
+            frozen,
             base_velocity,
             base_step,
             x,
@@ -629,7 +634,7 @@ impl Simulator {
         let totals = self.assembly.evaluate(
             &self.model,
             x,
-            x0,
+            frozen,
             trial,
             &env,
             c,
@@ -689,6 +694,14 @@ impl Simulator {
                 let held = w.x0[i] + f.z[i] * lag;
                 let toward = (Mat3::identity() - f.s[i]) * (held - w.base[i]);
                 w.base[i] += toward;
+            }
+        }
+        match self.settings.integrator {
+            Integrator::BackwardEuler => w.frozen.copy_from_slice(&w.x0),
+            Integrator::Bdf2 => {
+                for ((p, base), v) in w.frozen.iter_mut().zip(&w.base).zip(&w.base_velocity) {
+                    *p = base + v * w.base_step;
+                }
             }
         }
     }
