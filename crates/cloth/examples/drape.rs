@@ -6,12 +6,13 @@
 //! change meant to keep the numbers (a faster product, another thread count) can show that it
 //! kept them to the last bit.
 //!
-//! `cargo run --release -p tailor-cloth --example drape -- [N] [--self] [--frames F] [--substeps S]`
+//! `cargo run --release -p tailor-cloth --example drape -- [N] [--self] [--frames F] [--substeps S]
+//! [--bdf2]` (the library's default integrator, backward Euler, unless `--bdf2`)
 
 use std::time::Instant;
 
 use tailor_cloth::shapes::{centred_sheet, sphere};
-use tailor_cloth::{Material, Model, Settings, Simulator, State};
+use tailor_cloth::{Integrator, Material, Model, Settings, Simulator, State};
 use tailor_subdiv::Point;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -19,10 +20,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut frames = 60;
     let mut self_collision = false;
     let mut substeps: Option<u32> = None;
+    let mut integrator = Settings::default().integrator;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--self" => self_collision = true,
+            "--bdf2" => integrator = Integrator::Bdf2,
             "--frames" => frames = args.next().ok_or("--frames needs a count")?.parse()?,
             "--substeps" => {
                 substeps = Some(args.next().ok_or("--substeps needs a count")?.parse()?);
@@ -35,6 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let defaults = Settings::default();
     let settings = Settings {
         self_collision,
+        integrator,
         max_substep: substeps.map_or(defaults.max_substep, |s| 1.0 / (24.0 * f64::from(s))),
         ..defaults
     };
