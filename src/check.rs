@@ -20,6 +20,7 @@ use nalgebra::Point3;
 use serde_json::json;
 use tailor_collide::Hierarchy;
 
+use crate::output;
 use crate::polymesh_obj::{self, PolyMesh};
 use crate::sequence::Pattern;
 
@@ -28,7 +29,8 @@ use crate::sequence::Pattern;
 #[command(
     after_help = "Exit status: 0 when nothing is found, 1 when any vertex penetrates or any \
 faces intersect, 2 when the input cannot be checked (unreadable file, non-finite coordinate, \
-missing frame)."
+missing frame) or the summary or report cannot be written. When standard output is closed \
+early (`| head`), the check stops quietly with exit status 0."
 )]
 pub struct Args {
     /// Cloth OBJ, or a frame sequence pattern such as `out/cloth_####.obj` (each run of `#` is
@@ -120,11 +122,14 @@ impl Findings {
 /// Runs `tailor check`: exit 0 clean, 1 found, 2 cannot check.
 ///
 /// # Errors
-/// Never: problems with the input are printed and give exit status 2.
+/// Only standard output closed by its reader ([`output::stdout_closed`]); other problems,
+/// with the input or with writing the summary or the report, are printed and give exit
+/// status 2, since 1 means the cloth was found wanting.
 pub fn run(args: &Args) -> Result<ExitCode> {
     match check(args) {
         Ok(true) => Ok(ExitCode::SUCCESS),
         Ok(false) => Ok(ExitCode::from(1)),
+        Err(err) if output::stdout_closed(&err) => Err(err),
         Err(err) => {
             eprintln!("error: {err:#}");
             Ok(ExitCode::from(2))
@@ -176,7 +181,7 @@ fn check(args: &Args) -> Result<bool> {
         total.max_penetration = total.max_penetration.max(found.max_penetration);
         total.self_intersecting_pairs += found.self_intersecting_pairs;
         if frames.len() > 1 {
-            println!("{}", line(&format!("frame {frame}"), &found, deepest));
+            output::print(&(line(&format!("frame {frame}"), &found, deepest) + "\n"))?;
         }
         rows.push((*frame, found, deepest));
     }
@@ -186,14 +191,13 @@ fn check(args: &Args) -> Result<bool> {
         [(_, only, deepest)] => (*only, *deepest),
         _ => (total, None),
     };
-    println!(
-        "{}",
-        line(
+    output::print(
+        &(line(
             &format!("{} frame(s) checked", frames.len()),
             &total,
-            deepest
-        )
-    );
+            deepest,
+        ) + "\n"),
+    )?;
     if let Some(path) = &args.json {
         let report = json!({
             "frames": rows.iter().map(|(frame, f, deepest)| {

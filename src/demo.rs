@@ -17,7 +17,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Parser;
 
-use crate::output::write_atomically;
+use crate::output::{self, write_atomically};
 use crate::simulate::{self, FrameRange};
 
 /// Frames the demo simulates after the rest pose.
@@ -130,18 +130,17 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         picture.as_os_str(),
     ])?;
     crate::preview::run(&preview.args)?;
-    println!("a contact sheet of the cape: {}", picture.display());
-    println!(
-        "the cape: {}, its control mesh: {}, the body: {}",
+    output::print(&format!(
+        "a contact sheet of the cape: {}\n\
+         the cape: {}, its control mesh: {}, the body: {}\n\
+         check it with: tailor check '{}' --against '{}' --thickness 0.005\n",
+        picture.display(),
         dir.join("cloth_####.obj").display(),
         dir.join("cloth_control_####.obj").display(),
-        dir.join("body_####.obj").display()
-    );
-    println!(
-        "check it with: tailor check '{}' --against '{}' --thickness 0.005",
+        dir.join("body_####.obj").display(),
         dir.join("cloth_####.obj").display(),
         dir.join("body_####.obj").display()
-    );
+    ))?;
     Ok(ExitCode::SUCCESS)
 }
 

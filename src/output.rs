@@ -3,12 +3,58 @@
 //! The content goes to a temporary file beside the destination (same directory, so the final
 //! rename stays on one file system), is flushed and synced, then renamed over the destination.
 //! An interrupted run leaves the previous file intact, never a half-written one.
+//!
+//! Standard output is written through [`print`] and [`write_to`]: a reader that goes away
+//! early (`tailor info x.obj | head -1`, a broken pipe) is not an error worth a message, as
+//! it has read all it wanted, so the command stops quietly with exit status 0
+//! ([`stdout_closed`]); any other failure (a full disk behind a redirection) is an error
+//! naming standard output. Rust ignores SIGPIPE, so without this a closed pipe would make
+//! `println!` panic.
 
 use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+
+/// Standard output was closed by its reader: the command stops quietly, with exit status 0.
+#[derive(Debug)]
+struct StdoutClosed;
+
+impl std::fmt::Display for StdoutClosed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("standard output was closed by its reader")
+    }
+}
+
+impl std::error::Error for StdoutClosed {}
+
+/// Whether `err` is standard output closed by its reader, which ends a command quietly.
+#[must_use]
+pub fn stdout_closed(err: &anyhow::Error) -> bool {
+    err.is::<StdoutClosed>()
+}
+
+/// A failed write to standard output: [`stdout_closed`] for a broken pipe, else an error
+/// naming standard output.
+fn stdout_error(err: io::Error) -> anyhow::Error {
+    if err.kind() == io::ErrorKind::BrokenPipe {
+        StdoutClosed.into()
+    } else {
+        anyhow::Error::new(err).context("writing standard output")
+    }
+}
+
+/// Writes `text` to standard output and flushes it.
+///
+/// # Errors
+/// As [`write_to`] with `-`.
+pub fn print(text: &str) -> Result<()> {
+    let mut out = io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(stdout_error)
+}
 
 /// Writes `path` atomically with the bytes `write` produces.
 ///
@@ -42,14 +88,15 @@ fn temporary_path(path: &Path) -> PathBuf {
 /// Writes to `path`, or to standard output when `path` is `-`.
 ///
 /// # Errors
-/// As [`write_atomically`].
+/// As [`write_atomically`]; for `-`, a broken pipe is [`stdout_closed`] and any other failure
+/// names standard output.
 pub fn write_to(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
     if path.as_os_str() == "-" {
         let stdout = io::stdout();
         let mut lock = io::BufWriter::new(stdout.lock());
         write(&mut lock)
             .and_then(|()| lock.flush())
-            .context("writing standard output")
+            .map_err(stdout_error)
     } else {
         write_atomically(path, |w| write(w))
     }

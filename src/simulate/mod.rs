@@ -42,7 +42,7 @@ use tailor_cloth::{Model, Motion, Settings, Simulator, State};
 use tailor_subdiv::Mesh;
 
 use crate::checkpoint::{self, Checkpoint, FrameStats};
-use crate::output::write_atomically;
+use crate::output::{self, write_atomically};
 use crate::scene::{self, Scene};
 use attach::Bindings;
 use surface::Surface;
@@ -260,11 +260,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
         &scene.cloth.doc,
         &shot.cloth,
     );
-    summary::report(&scene.path, &dir, scene.cloth.thickness, &stats, &failures)?;
-    println!(
-        "frames {first} to {last}: {}",
-        dir.join("cloth_####.obj").display()
-    );
+    let summary = summary::report(&scene.path, &dir, scene.cloth.thickness, &stats, &failures)?;
     for failure in &failures {
         eprintln!("warning: {failure}");
     }
@@ -279,6 +275,11 @@ fn simulate(args: &Args) -> Result<Outcome> {
             }
         );
     }
+    // Last, so that a reader of standard output going away early loses nothing else.
+    output::print(&format!(
+        "{summary}frames {first} to {last}: {}\n",
+        dir.join("cloth_####.obj").display()
+    ))?;
     Ok(Outcome { dir, rejected })
 }
 
