@@ -4,6 +4,15 @@
 //! rename stays on one file system), is flushed and synced, then renamed over the destination.
 //! An interrupted run leaves the previous file intact, never a half-written one.
 //!
+//! Renaming over a path replaces whatever the path named, so the destination is looked at
+//! first. A symbolic link is followed (link after link) to the file it names, which is
+//! replaced atomically in its own directory; the link stays, as a user who linked
+//! `out.obj -> /shots/real.obj` wants `real.obj` written. A destination that exists and is
+//! neither a regular file nor a directory (a device such as `/dev/null`, a FIFO, a socket) is
+//! opened and written in place, since it cannot be half-written the way a file can, and
+//! replacing it with a regular file would break whatever else uses it (as root, `-o /dev/null`
+//! would replace the system's `/dev/null`). A FIFO's write waits for its reader.
+//!
 //! Standard output is written through [`print`] and [`write_to`]: a reader that goes away
 //! early (`tailor info x.obj | head -1`, a broken pipe) is not an error worth a message, as
 //! it has read all it wanted, so the command stops quietly with exit status 0
@@ -11,7 +20,7 @@
 //! naming standard output. Rust ignores SIGPIPE, so without this a closed pipe would make
 //! `println!` panic.
 
-use std::fs::{self, File};
+use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -64,6 +73,26 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 ) -> Result<()> {
+    (|| -> io::Result<()> {
+        let target = follow_links(path)?;
+        match fs::metadata(&target) {
+            Ok(meta) if !meta.is_file() && !meta.is_dir() => {
+                let mut out = BufWriter::new(OpenOptions::new().write(true).open(&target)?);
+                write(&mut out)?;
+                out.flush()
+            }
+            _ => replace(&target, write),
+        }
+    })()
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes a temporary file beside `path` and renames it over `path`; the temporary is
+/// removed on failure.
+fn replace(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+) -> io::Result<()> {
     let tmp = temporary_path(path);
     let result = (|| -> io::Result<()> {
         let mut out = BufWriter::new(File::create(&tmp)?);
@@ -75,7 +104,31 @@ pub fn write_atomically(
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }
-    result.with_context(|| format!("writing {}", path.display()))
+    result
+}
+
+/// Symbolic links the destination may go through before it is refused, as the kernel's
+/// `ELOOP` limit.
+const MAX_LINKS: usize = 40;
+
+/// `path` with its symbolic links followed to the path they end at, which need not exist
+/// yet (a dangling link is written through, creating its target).
+fn follow_links(path: &Path) -> io::Result<PathBuf> {
+    let mut path = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        match fs::symlink_metadata(&path) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                // A relative target is relative to the link's directory; `join` keeps an
+                // absolute one as it is.
+                let target = fs::read_link(&path)?;
+                path = path.parent().unwrap_or(Path::new("")).join(target);
+            }
+            _ => return Ok(path),
+        }
+    }
+    Err(io::Error::other(format!(
+        "more than {MAX_LINKS} symbolic links to follow"
+    )))
 }
 
 fn temporary_path(path: &Path) -> PathBuf {
