@@ -1,6 +1,8 @@
 //! `tailor check`: quality control of a finished simulation. Per frame, the cloth vertices
 //! inside the body or closer to it than the thickness, the deepest of them, and the cloth's
-//! self-intersecting face pairs; a summary on standard output and optionally a JSON report.
+//! self-intersecting face pairs; a summary on standard output and optionally a JSON report,
+//! written atomically like every file the tool writes, so a failed write leaves the earlier
+//! report whole.
 //! Counts say how bad a frame is, not where to look, so each frame also names its deepest
 //! vertex and its first crossing face pair (in ascending order, so the same mesh always names
 //! the same pair): here by the vertex's position (the reader numbers vertices in order of
@@ -11,7 +13,7 @@
 //! and needs a closed body; an open body is checked by distance only. Hierarchies are built for
 //! the first frame and refit for every later frame of the same topology.
 
-use std::fs;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -213,8 +215,8 @@ fn check(args: &Args) -> Result<bool> {
             }).collect::<Vec<_>>(),
             "total": total.json(),
         });
-        let text = serde_json::to_string_pretty(&report)?;
-        fs::write(path, text + "\n").with_context(|| format!("writing {}", path.display()))?;
+        let text = serde_json::to_string_pretty(&report)? + "\n";
+        output::write_atomically(path, |w| w.write_all(text.as_bytes()))?;
     }
     Ok(total.is_clean())
 }
