@@ -108,7 +108,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             scene.display()
         );
     }
-    let dir = simulate::run_in_pool(&simulate::Args {
+    let outcome = simulate::run_in_pool(&simulate::Args {
         scene,
         out: Some(args.out.clone()),
         frames: Some(FrameRange {
@@ -120,8 +120,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         quiet: args.quiet,
         strict: false,
         stop_after: None,
-    })?
-    .dir;
+    })?;
+    if outcome.interrupted {
+        return Ok(ExitCode::from(crate::interrupt::STATUS));
+    }
+    let dir = outcome.dir;
     let picture = dir.join("preview.png");
     let preview = PreviewCli::try_parse_from([
         "preview".as_ref(),

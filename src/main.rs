@@ -9,6 +9,7 @@ mod check;
 mod checkpoint;
 mod demo;
 mod info;
+mod interrupt;
 mod output;
 mod polymesh_obj;
 mod preview;

@@ -131,11 +131,25 @@ fn follow_links(path: &Path) -> io::Result<PathBuf> {
     )))
 }
 
+/// The temporary file written before `path`: `.NAME.tmp-PID` beside it, hidden, and named
+/// after the file and the process so that [`temporary_of`] can tell whose it is.
 fn temporary_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+    path.with_file_name(format!(".{name}{TEMPORARY}{}", std::process::id()))
+}
+
+/// What separates a temporary's destination name from its process id.
+const TEMPORARY: &str = ".tmp-";
+
+/// The name of the file whose temporary (a [`write_atomically`] killed before its rename)
+/// is called `name`, or `None` when `name` is not such a temporary.
+#[must_use]
+pub fn temporary_of(name: &str) -> Option<&str> {
+    let (destination, pid) = name.strip_prefix('.')?.rsplit_once(TEMPORARY)?;
+    let is_pid = !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit());
+    (is_pid && !destination.is_empty()).then_some(destination)
 }
 
 /// Writes to `path`, or to standard output when `path` is `-`.
@@ -177,5 +191,21 @@ mod tests {
             "temporary file left behind"
         );
         fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn recognises_its_own_temporaries() {
+        let tmp = temporary_path(Path::new("out/cloth_0003.obj"));
+        let name = tmp.file_name().unwrap().to_str().unwrap();
+        assert_eq!(temporary_of(name), Some("cloth_0003.obj"));
+        for other in [
+            "cloth_0003.obj",
+            "cloth_0003.obj.tmp-12",
+            ".cloth_0003.obj.tmp-",
+            ".cloth_0003.obj.tmp-12a",
+            "..tmp-12",
+        ] {
+            assert_eq!(temporary_of(other), None, "{other}");
+        }
     }
 }

@@ -13,6 +13,9 @@ use crate::output::write_atomically;
 
 use super::quality::{self, Failure};
 
+/// The summary's file name.
+pub const FILE: &str = "summary.json";
+
 /// Writes `summary.json` of `stats` (every frame simulated so far), `failures` the frames
 /// that failed their quality, and returns the summary's lines for standard output.
 ///
@@ -74,7 +77,7 @@ pub fn report(
         "failures": quality::json(failures),
     });
     let text = serde_json::to_string_pretty(&summary)? + "\n";
-    let path = dir.join("summary.json");
+    let path = dir.join(FILE);
     write_atomically(&path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
     Ok(format!(
         "{}: {} frames simulated in {:.1} s ({mean_ms:.0} ms per frame)\n\
