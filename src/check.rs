@@ -36,7 +36,8 @@ early (`| head`), the check stops quietly with exit status 0."
 )]
 pub struct Args {
     /// Cloth OBJ, or a frame sequence pattern such as `out/cloth_####.obj` (each run of `#` is
-    /// the zero-padded frame number; every frame present is checked).
+    /// the zero-padded frame number; every frame present is checked, and a frame missing
+    /// between the first and the last is an error).
     pub cloth: PathBuf,
     /// Body OBJ, or a body sequence pattern such as `body_####.obj` matched frame by frame.
     /// A closed body (every edge shared by two faces, faces counter-clockwise seen from
@@ -234,6 +235,15 @@ fn frames(args: &Args) -> Result<Vec<(u32, PathBuf, Option<PathBuf>)>> {
     let numbers = pattern.frames()?;
     if numbers.is_empty() {
         bail!("no file matches {}", args.cloth.display());
+    }
+    if let Some(pair) = numbers.windows(2).find(|pair| pair[1] != pair[0] + 1) {
+        bail!(
+            "{} is missing from the sequence {} (frames {} to {} are there)",
+            pattern.path(pair[0] + 1).display(),
+            args.cloth.display(),
+            numbers[0],
+            numbers[numbers.len() - 1]
+        );
     }
     Ok(numbers
         .into_iter()

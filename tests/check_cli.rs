@@ -164,6 +164,14 @@ fn sequences_are_checked_frame_by_frame() {
     let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("body_0003.obj"));
+
+    // Nor can a sequence with a frame missing in the middle.
+    write(&dir, "body_0003.obj", CUBE);
+    fs::remove_file(dir.join("cloth_0002.obj")).unwrap();
+    let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("cloth_0002.obj is missing"), "{err}");
 }
 
 #[test]

@@ -445,6 +445,39 @@ fn stale_temporaries_of_its_own_files_are_removed() {
 }
 
 #[test]
+fn a_fresh_run_removes_the_files_of_an_earlier_one() {
+    let dir = scratch("fresh");
+    let scene = shot(&dir, &[]);
+    let scene = scene.to_str().unwrap();
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    run_ok(&[scene, "--out", out_s, "--quiet"]);
+    fs::write(out.join("notes.txt"), "mine").unwrap();
+    let earlier = everything(&out).len() - 1;
+    // A shorter shot into the same directory: frames 4 to 10 of the longer one must go.
+    let o = run_ok(&[scene, "--out", out_s, "--frames", "..3"]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(&format!("removed {earlier} file(s) of an earlier run")),
+        "{stderr}"
+    );
+    let names: Vec<String> = everything(&out).into_keys().collect();
+    let mut expected = vec!["notes.txt".to_owned(), "summary.json".to_owned()];
+    for frame in 0..=3 {
+        for prefix in ["body", "cloth", "cloth_control"] {
+            expected.push(format!("{prefix}_{frame:04}.obj"));
+        }
+    }
+    expected.push("tailor_checkpoint.bin".to_owned());
+    expected.sort();
+    assert_eq!(names, expected);
+    // Resuming keeps them.
+    let o = run_ok(&[scene, "--out", out_s, "--resume"]);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("earlier run"));
+    assert!(out.join("cloth_0010.obj").exists());
+}
+
+#[test]
 fn bad_input_is_refused_before_anything_is_written() {
     let dir = scratch("bad");
     let scene = shot(&dir, &[]);

@@ -21,7 +21,8 @@
 //! bad shot and still look at it.
 //!
 //! Before the first frame, a run removes the temporaries that killed runs left in the output
-//! directory, its own files' only ([`outputs`]). Ctrl-C stops the run after the frame being
+//! directory and, unless it resumes, the files of an earlier run there: its own files' only
+//! ([`outputs`]). Ctrl-C stops the run after the frame being
 //! written, with its checkpoint, exit status 130 ([`crate::interrupt`]).
 //!
 //! Work runs on a rayon pool of `--threads` threads; every parallel loop in the crates reduces
@@ -71,7 +72,8 @@ under \"failures\" in summary.json. Exit status: 0 done (warnings or not), 1 bad
 diverging simulation, 2 bad arguments, 3 with --strict or [scene] strict = true when a frame \
 failed its quality (everything is written first), 130 stopped by Ctrl-C after a frame and its \
 checkpoint (--resume continues; a second Ctrl-C stops at once). Temporaries of these files \
-that a killed run left (.cloth_0020.obj.tmp-PID) are removed at the start of a run."
+that a killed run left (.cloth_0020.obj.tmp-PID) are removed at the start of a run, and so are \
+these files of an earlier run unless resuming."
 )]
 pub struct Args {
     /// Scene file (TOML; see assets/scenes/cape.toml).
@@ -223,6 +225,15 @@ fn simulate(args: &Args) -> Result<Outcome> {
             "note: removed {stale} temporary file(s) left in {} by an interrupted run",
             dir.display()
         );
+    }
+    if next == 0 {
+        let earlier = outputs::remove_earlier(&dir)?;
+        if earlier > 0 && !args.quiet {
+            eprintln!(
+                "note: removed {earlier} file(s) of an earlier run from {}",
+                dir.display()
+            );
+        }
     }
     interrupt::watch()?;
     if next > 0 {

@@ -3,7 +3,10 @@
 //! (`.cloth_0020.obj.tmp-7257`: SIGKILL, or a second Ctrl-C, gives no chance to remove them).
 //!
 //! A run removes stale temporaries before its first frame, so they do not pile up over
-//! interrupted runs. Nothing else in the directory is touched: the scene's inputs may live
+//! interrupted runs. A run that starts from frame 0 also removes the files of an earlier run:
+//! a shorter shot written over a longer one would otherwise leave the longer one's last
+//! frames behind, and `tailor check` and `tailor preview`, which read every frame of a
+//! sequence present, would take them for the new shot's. Nothing else in the directory is touched: the scene's inputs may live
 //! there (the demo's `input/`), and so may the user's own files, hidden or not.
 
 use std::fs;
@@ -40,6 +43,15 @@ fn is_temporary(name: &str) -> bool {
 /// When `dir` cannot be listed or a temporary cannot be removed, naming it.
 pub fn remove_temporaries(dir: &Path) -> Result<usize> {
     remove(dir, is_temporary)
+}
+
+/// Removes the files an earlier run wrote into `dir` (a run starting from frame 0 writes
+/// them all afresh); returns how many.
+///
+/// # Errors
+/// As [`remove_temporaries`].
+pub fn remove_earlier(dir: &Path) -> Result<usize> {
+    remove(dir, is_output)
 }
 
 /// Removes the files in `dir` whose names pass `which`; returns how many.
