@@ -1,6 +1,8 @@
 //! `tailor check`: quality control of a finished simulation. Per frame, the cloth vertices
 //! inside the body or closer to it than the thickness, the deepest of them, and the cloth's
-//! self-intersecting face pairs; a summary on standard output and optionally a JSON report.
+//! self-intersecting face pairs; a summary on standard output and optionally a JSON report,
+//! written atomically like every file the tool writes, so a failed write leaves the earlier
+//! report whole.
 //! Counts say how bad a frame is, not where to look, so each frame also names its deepest
 //! vertex and its first crossing face pair (in ascending order, so the same mesh always names
 //! the same pair): here by the vertex's position (the reader numbers vertices in order of
@@ -11,7 +13,7 @@
 //! and needs a closed body; an open body is checked by distance only. Hierarchies are built for
 //! the first frame and refit for every later frame of the same topology.
 
-use std::fs;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -20,6 +22,7 @@ use nalgebra::Point3;
 use serde_json::json;
 use tailor_collide::Hierarchy;
 
+use crate::output;
 use crate::polymesh_obj::{self, PolyMesh};
 use crate::sequence::Pattern;
 
@@ -28,11 +31,13 @@ use crate::sequence::Pattern;
 #[command(
     after_help = "Exit status: 0 when nothing is found, 1 when any vertex penetrates or any \
 faces intersect, 2 when the input cannot be checked (unreadable file, non-finite coordinate, \
-missing frame)."
+missing frame) or the summary or report cannot be written. When standard output is closed \
+early (`| head`), the check stops quietly with exit status 0."
 )]
 pub struct Args {
     /// Cloth OBJ, or a frame sequence pattern such as `out/cloth_####.obj` (each run of `#` is
-    /// the zero-padded frame number; every frame present is checked).
+    /// the zero-padded frame number; every frame present is checked, and a frame missing
+    /// between the first and the last is an error).
     pub cloth: PathBuf,
     /// Body OBJ, or a body sequence pattern such as `body_####.obj` matched frame by frame.
     /// A closed body (every edge shared by two faces, faces counter-clockwise seen from
@@ -120,11 +125,14 @@ impl Findings {
 /// Runs `tailor check`: exit 0 clean, 1 found, 2 cannot check.
 ///
 /// # Errors
-/// Never: problems with the input are printed and give exit status 2.
+/// Only standard output closed by its reader ([`output::stdout_closed`]); other problems,
+/// with the input or with writing the summary or the report, are printed and give exit
+/// status 2, since 1 means the cloth was found wanting.
 pub fn run(args: &Args) -> Result<ExitCode> {
     match check(args) {
         Ok(true) => Ok(ExitCode::SUCCESS),
         Ok(false) => Ok(ExitCode::from(1)),
+        Err(err) if output::stdout_closed(&err) => Err(err),
         Err(err) => {
             eprintln!("error: {err:#}");
             Ok(ExitCode::from(2))
@@ -176,7 +184,7 @@ fn check(args: &Args) -> Result<bool> {
         total.max_penetration = total.max_penetration.max(found.max_penetration);
         total.self_intersecting_pairs += found.self_intersecting_pairs;
         if frames.len() > 1 {
-            println!("{}", line(&format!("frame {frame}"), &found, deepest));
+            output::print(&(line(&format!("frame {frame}"), &found, deepest) + "\n"))?;
         }
         rows.push((*frame, found, deepest));
     }
@@ -186,14 +194,13 @@ fn check(args: &Args) -> Result<bool> {
         [(_, only, deepest)] => (*only, *deepest),
         _ => (total, None),
     };
-    println!(
-        "{}",
-        line(
+    output::print(
+        &(line(
             &format!("{} frame(s) checked", frames.len()),
             &total,
-            deepest
-        )
-    );
+            deepest,
+        ) + "\n"),
+    )?;
     if let Some(path) = &args.json {
         let report = json!({
             "frames": rows.iter().map(|(frame, f, deepest)| {
@@ -209,8 +216,8 @@ fn check(args: &Args) -> Result<bool> {
             }).collect::<Vec<_>>(),
             "total": total.json(),
         });
-        let text = serde_json::to_string_pretty(&report)?;
-        fs::write(path, text + "\n").with_context(|| format!("writing {}", path.display()))?;
+        let text = serde_json::to_string_pretty(&report)? + "\n";
+        output::write_atomically(path, |w| w.write_all(text.as_bytes()))?;
     }
     Ok(total.is_clean())
 }
@@ -228,6 +235,15 @@ fn frames(args: &Args) -> Result<Vec<(u32, PathBuf, Option<PathBuf>)>> {
     let numbers = pattern.frames()?;
     if numbers.is_empty() {
         bail!("no file matches {}", args.cloth.display());
+    }
+    if let Some(pair) = numbers.windows(2).find(|pair| pair[1] != pair[0] + 1) {
+        bail!(
+            "{} is missing from the sequence {} (frames {} to {} are there)",
+            pattern.path(pair[0] + 1).display(),
+            args.cloth.display(),
+            numbers[0],
+            numbers[numbers.len() - 1]
+        );
     }
     Ok(numbers
         .into_iter()

@@ -55,10 +55,13 @@ use crate::scene::Fingerprint;
 const MAGIC: &[u8; 8] = b"TAILORCK";
 const VERSION: u32 = 5;
 
+/// The checkpoint's file name.
+pub const FILE: &str = "tailor_checkpoint.bin";
+
 /// The checkpoint file in an output directory.
 #[must_use]
 pub fn path(dir: &Path) -> PathBuf {
-    dir.join("tailor_checkpoint.bin")
+    dir.join(FILE)
 }
 
 /// The figures of one simulated frame.

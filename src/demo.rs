@@ -17,7 +17,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Parser;
 
-use crate::output::write_atomically;
+use crate::output::{self, write_atomically};
 use crate::simulate::{self, FrameRange};
 
 /// Frames the demo simulates after the rest pose.
@@ -108,7 +108,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             scene.display()
         );
     }
-    let dir = simulate::run_in_pool(&simulate::Args {
+    let outcome = simulate::run_in_pool(&simulate::Args {
         scene,
         out: Some(args.out.clone()),
         frames: Some(FrameRange {
@@ -120,8 +120,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         quiet: args.quiet,
         strict: false,
         stop_after: None,
-    })?
-    .dir;
+    })?;
+    if outcome.interrupted {
+        return Ok(ExitCode::from(crate::interrupt::STATUS));
+    }
+    let dir = outcome.dir;
     let picture = dir.join("preview.png");
     let preview = PreviewCli::try_parse_from([
         "preview".as_ref(),
@@ -130,18 +133,17 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         picture.as_os_str(),
     ])?;
     crate::preview::run(&preview.args)?;
-    println!("a contact sheet of the cape: {}", picture.display());
-    println!(
-        "the cape: {}, its control mesh: {}, the body: {}",
+    output::print(&format!(
+        "a contact sheet of the cape: {}\n\
+         the cape: {}, its control mesh: {}, the body: {}\n\
+         check it with: tailor check '{}' --against '{}' --thickness 0.005\n",
+        picture.display(),
         dir.join("cloth_####.obj").display(),
         dir.join("cloth_control_####.obj").display(),
-        dir.join("body_####.obj").display()
-    );
-    println!(
-        "check it with: tailor check '{}' --against '{}' --thickness 0.005",
+        dir.join("body_####.obj").display(),
         dir.join("cloth_####.obj").display(),
         dir.join("body_####.obj").display()
-    );
+    ))?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -5,12 +5,14 @@
 //! (so "non-manifold" here means exactly what OpenSubdiv would sharpen).
 
 use std::collections::BTreeMap;
+use std::fmt::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
 use tailor_subdiv::topology::Level;
 
+use crate::output;
 use crate::subdivide::read_mesh;
 
 /// Arguments of `tailor info`.
@@ -23,52 +25,62 @@ pub struct Args {
 /// Runs the command.
 ///
 /// # Errors
-/// Unreadable or invalid input.
+/// Unreadable or invalid input, standard output that cannot be written.
 pub fn run(args: &Args) -> Result<ExitCode> {
     let doc = read_mesh(&args.input)?;
     let mesh = &doc.mesh;
     let level = Level::from_mesh(mesh);
-    println!("{}", args.input.display());
-    println!("  vertices         {}", mesh.vertex_count());
-    println!("  faces            {}", mesh.face_count());
-    println!("  edges            {}", level.edge_count());
+    let mut out = String::new();
+    writeln!(out, "{}", args.input.display())?;
+    writeln!(out, "  vertices         {}", mesh.vertex_count())?;
+    writeln!(out, "  faces            {}", mesh.face_count())?;
+    writeln!(out, "  edges            {}", level.edge_count())?;
     let sizes = histogram((0..mesh.face_count()).map(|f| mesh.face(f).len()));
-    println!("  face sizes       {}", format_histogram(&sizes));
+    writeln!(out, "  face sizes       {}", format_histogram(&sizes))?;
     let valences = histogram((0..level.vertex_count).map(|v| level.vert_edges.range(v).len()));
-    println!("  valences         {}", format_histogram(&valences));
+    writeln!(out, "  valences         {}", format_histogram(&valences))?;
     let boundary = (0..level.edge_count())
         .filter(|&e| level.is_boundary_edge(e))
         .count();
     let nm_edges = level.edge_nonmanifold.iter().filter(|&&n| n).count();
     let nm_verts = level.vertex_nonmanifold.iter().filter(|&&n| n).count();
-    println!("  boundary edges   {boundary}");
-    println!("  non-manifold     {nm_edges} edges, {nm_verts} vertices");
-    println!(
+    writeln!(out, "  boundary edges   {boundary}")?;
+    writeln!(
+        out,
+        "  non-manifold     {nm_edges} edges, {nm_verts} vertices"
+    )?;
+    writeln!(
+        out,
         "  creases          {}",
         sharpness_summary(mesh.creases().iter().map(|c| c.sharpness))
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "  corners          {}",
         sharpness_summary(mesh.corners().iter().map(|c| c.sharpness))
-    );
-    println!("  holes            {}", mesh.holes().len());
-    println!(
+    )?;
+    writeln!(out, "  holes            {}", mesh.holes().len())?;
+    writeln!(
+        out,
         "  uvs              {}",
         mesh.uvs().map_or(0, |u| u.values.len())
-    );
-    println!("  groups           {}", doc.groups.len());
+    )?;
+    writeln!(out, "  groups           {}", doc.groups.len())?;
     let (lo, hi) = bounds(mesh.positions());
-    println!(
+    writeln!(
+        out,
         "  bounding box     [{}, {}, {}] .. [{}, {}, {}]",
         lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "  options          boundary {}, creases {}, triangles {}, uvs {}",
         mesh.options.boundary,
         mesh.options.crease_method,
         mesh.options.triangle_rule,
         mesh.options.fvar_linear
-    );
+    )?;
+    output::print(&out)?;
     Ok(ExitCode::SUCCESS)
 }
 

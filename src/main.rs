@@ -9,6 +9,7 @@ mod check;
 mod checkpoint;
 mod demo;
 mod info;
+mod interrupt;
 mod output;
 mod polymesh_obj;
 mod preview;
@@ -54,6 +55,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
+        Err(err) if output::stdout_closed(&err) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err:#}");
             ExitCode::from(1)

@@ -3,12 +3,67 @@
 //! The content goes to a temporary file beside the destination (same directory, so the final
 //! rename stays on one file system), is flushed and synced, then renamed over the destination.
 //! An interrupted run leaves the previous file intact, never a half-written one.
+//!
+//! Renaming over a path replaces whatever the path named, so the destination is looked at
+//! first. A symbolic link is followed (link after link) to the file it names, which is
+//! replaced atomically in its own directory; the link stays, as a user who linked
+//! `out.obj -> /shots/real.obj` wants `real.obj` written. A destination that exists and is
+//! neither a regular file nor a directory (a device such as `/dev/null`, a FIFO, a socket) is
+//! opened and written in place, since it cannot be half-written the way a file can, and
+//! replacing it with a regular file would break whatever else uses it (as root, `-o /dev/null`
+//! would replace the system's `/dev/null`). A FIFO's write waits for its reader.
+//!
+//! Standard output is written through [`print`] and [`write_to`]: a reader that goes away
+//! early (`tailor info x.obj | head -1`, a broken pipe) is not an error worth a message, as
+//! it has read all it wanted, so the command stops quietly with exit status 0
+//! ([`stdout_closed`]); any other failure (a full disk behind a redirection) is an error
+//! naming standard output. Rust ignores SIGPIPE, so without this a closed pipe would make
+//! `println!` panic.
 
-use std::fs::{self, File};
+use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+
+/// Standard output was closed by its reader: the command stops quietly, with exit status 0.
+#[derive(Debug)]
+struct StdoutClosed;
+
+impl std::fmt::Display for StdoutClosed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("standard output was closed by its reader")
+    }
+}
+
+impl std::error::Error for StdoutClosed {}
+
+/// Whether `err` is standard output closed by its reader, which ends a command quietly.
+#[must_use]
+pub fn stdout_closed(err: &anyhow::Error) -> bool {
+    err.is::<StdoutClosed>()
+}
+
+/// A failed write to standard output: [`stdout_closed`] for a broken pipe, else an error
+/// naming standard output.
+fn stdout_error(err: io::Error) -> anyhow::Error {
+    if err.kind() == io::ErrorKind::BrokenPipe {
+        StdoutClosed.into()
+    } else {
+        anyhow::Error::new(err).context("writing standard output")
+    }
+}
+
+/// Writes `text` to standard output and flushes it.
+///
+/// # Errors
+/// As [`write_to`] with `-`.
+pub fn print(text: &str) -> Result<()> {
+    let mut out = io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(stdout_error)
+}
 
 /// Writes `path` atomically with the bytes `write` produces.
 ///
@@ -18,6 +73,26 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 ) -> Result<()> {
+    (|| -> io::Result<()> {
+        let target = follow_links(path)?;
+        match fs::metadata(&target) {
+            Ok(meta) if !meta.is_file() && !meta.is_dir() => {
+                let mut out = BufWriter::new(OpenOptions::new().write(true).open(&target)?);
+                write(&mut out)?;
+                out.flush()
+            }
+            _ => replace(&target, write),
+        }
+    })()
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes a temporary file beside `path` and renames it over `path`; the temporary is
+/// removed on failure.
+fn replace(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+) -> io::Result<()> {
     let tmp = temporary_path(path);
     let result = (|| -> io::Result<()> {
         let mut out = BufWriter::new(File::create(&tmp)?);
@@ -29,27 +104,66 @@ pub fn write_atomically(
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }
-    result.with_context(|| format!("writing {}", path.display()))
+    result
 }
 
+/// Symbolic links the destination may go through before it is refused, as the kernel's
+/// `ELOOP` limit.
+const MAX_LINKS: usize = 40;
+
+/// `path` with its symbolic links followed to the path they end at, which need not exist
+/// yet (a dangling link is written through, creating its target).
+fn follow_links(path: &Path) -> io::Result<PathBuf> {
+    let mut path = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        match fs::symlink_metadata(&path) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                // A relative target is relative to the link's directory; `join` keeps an
+                // absolute one as it is.
+                let target = fs::read_link(&path)?;
+                path = path.parent().unwrap_or(Path::new("")).join(target);
+            }
+            _ => return Ok(path),
+        }
+    }
+    Err(io::Error::other(format!(
+        "more than {MAX_LINKS} symbolic links to follow"
+    )))
+}
+
+/// The temporary file written before `path`: `.NAME.tmp-PID` beside it, hidden, and named
+/// after the file and the process so that [`temporary_of`] can tell whose it is.
 fn temporary_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+    path.with_file_name(format!(".{name}{TEMPORARY}{}", std::process::id()))
+}
+
+/// What separates a temporary's destination name from its process id.
+const TEMPORARY: &str = ".tmp-";
+
+/// The name of the file whose temporary (a [`write_atomically`] killed before its rename)
+/// is called `name`, or `None` when `name` is not such a temporary.
+#[must_use]
+pub fn temporary_of(name: &str) -> Option<&str> {
+    let (destination, pid) = name.strip_prefix('.')?.rsplit_once(TEMPORARY)?;
+    let is_pid = !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit());
+    (is_pid && !destination.is_empty()).then_some(destination)
 }
 
 /// Writes to `path`, or to standard output when `path` is `-`.
 ///
 /// # Errors
-/// As [`write_atomically`].
+/// As [`write_atomically`]; for `-`, a broken pipe is [`stdout_closed`] and any other failure
+/// names standard output.
 pub fn write_to(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
     if path.as_os_str() == "-" {
         let stdout = io::stdout();
         let mut lock = io::BufWriter::new(stdout.lock());
         write(&mut lock)
             .and_then(|()| lock.flush())
-            .context("writing standard output")
+            .map_err(stdout_error)
     } else {
         write_atomically(path, |w| write(w))
     }
@@ -77,5 +191,21 @@ mod tests {
             "temporary file left behind"
         );
         fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn recognises_its_own_temporaries() {
+        let tmp = temporary_path(Path::new("out/cloth_0003.obj"));
+        let name = tmp.file_name().unwrap().to_str().unwrap();
+        assert_eq!(temporary_of(name), Some("cloth_0003.obj"));
+        for other in [
+            "cloth_0003.obj",
+            "cloth_0003.obj.tmp-12",
+            ".cloth_0003.obj.tmp-",
+            ".cloth_0003.obj.tmp-12a",
+            "..tmp-12",
+        ] {
+            assert_eq!(temporary_of(other), None, "{other}");
+        }
     }
 }

@@ -68,6 +68,12 @@ impl Pattern {
         Ok(frames)
     }
 
+    /// Whether a file name (no directory) is one of the pattern's frames.
+    #[must_use]
+    pub fn matches(&self, name: &str) -> bool {
+        self.frame_of(name).is_some()
+    }
+
     /// The frame number a file name stands for under this pattern.
     fn frame_of(&self, name: &str) -> Option<u32> {
         let digits = name

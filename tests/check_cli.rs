@@ -1,7 +1,8 @@
 //! End-to-end tests of `tailor check`: a clean cloth exits 0, a penetrating or self-intersecting
 //! one exits 1 with hand-counted findings in the JSON report (and where: the deepest vertex's
 //! position, the first crossing face pair), and input that cannot be checked exits 2 with a
-//! message naming the file.
+//! message naming the file. The report replaces an earlier one whole, never rewriting it in
+//! place.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -163,6 +164,14 @@ fn sequences_are_checked_frame_by_frame() {
     let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("body_0003.obj"));
+
+    // Nor can a sequence with a frame missing in the middle.
+    write(&dir, "body_0003.obj", CUBE);
+    fs::remove_file(dir.join("cloth_0002.obj")).unwrap();
+    let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("cloth_0002.obj is missing"), "{err}");
 }
 
 #[test]
@@ -210,4 +219,20 @@ fn unreadable_input_exits_2_naming_the_file() {
 
     let out = tailor(&[cloth.to_str().unwrap(), "--thickness", "-1"]);
     assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn the_report_replaces_the_earlier_one_whole() {
+    // A second name for the earlier report sees whether it was rewritten in place (where a
+    // failed write would leave it cut short) or replaced by a new file.
+    let dir = scratch("replace");
+    let cloth = write(&dir, "cloth.obj", &clean_sheet());
+    let earlier = write(&dir, "report.json", "{\"earlier\": true}\n");
+    fs::hard_link(&earlier, dir.join("kept.json")).unwrap();
+    let r = report(&dir, &[&cloth], &[], 0);
+    assert_eq!(r["total"]["penetrating_vertices"], 0);
+    assert_eq!(
+        fs::read_to_string(dir.join("kept.json")).unwrap(),
+        "{\"earlier\": true}\n"
+    );
 }

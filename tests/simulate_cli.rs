@@ -5,8 +5,9 @@
 //!   tolerance; regenerate them only on purpose, with
 //!   `TAILOR_BLESS=1 cargo test --test simulate_cli`, and say why in the commit.
 //! - The bytes do not depend on the thread count.
-//! - A run stopped after a frame, or killed midway, and resumed writes the same bytes as one
-//!   uninterrupted run; a finished shot resumed with more `frames` equals the longer shot;
+//! - A run stopped after a frame, killed midway, or interrupted by Ctrl-C (exit 130, no
+//!   temporary left) and resumed writes the same bytes as one uninterrupted run; a run removes
+//!   the temporaries of its own files that a killed run left, and nothing else; a finished shot resumed with more `frames` equals the longer shot;
 //!   a resume with any other change to the shot is refused, naming the key.
 //! - Each bad input is refused before anything is written, with a message naming the file and
 //!   the key or line, and leaves an earlier run's output untouched.
@@ -328,45 +329,152 @@ fn a_finished_shot_extended_by_resuming_equals_the_longer_shot() {
     );
 }
 
-#[test]
-fn killed_and_resumed_run_writes_the_same_bytes() {
-    // A longer shot, killed (SIGKILL, no chance to clean up) once frame 4 is on disk.
-    let dir = scratch("kill");
+/// Runs a 40-frame shot whole, and again stopped by `kill -SIGNAL` once frame 4 is on disk;
+/// checks that no file under a final name is cut short, resumes the stopped run, and checks
+/// that it wrote the same bytes as the whole one and left no temporary. Returns how the
+/// stopped run ended and what it printed on standard error.
+fn stopped_and_resumed(name: &str, signal: &str) -> (std::process::ExitStatus, String) {
+    let dir = scratch(name);
     let scene = shot(&dir, &[("frames = 10", "frames = 40")]);
     let scene = scene.to_str().unwrap();
     let whole = dir.join("whole");
-    let killed = dir.join("killed");
-    let (whole_s, killed_s) = (whole.to_str().unwrap(), killed.to_str().unwrap());
+    let stopped = dir.join("stopped");
+    let (whole_s, stopped_s) = (whole.to_str().unwrap(), stopped.to_str().unwrap());
     run_ok(&[scene, "--out", whole_s, "--quiet"]);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_tailor"))
-        .args(["simulate", scene, "--out", killed_s, "--quiet"])
+    let child = Command::new(env!("CARGO_BIN_EXE_tailor"))
+        .args(["simulate", scene, "--out", stopped_s, "--quiet"])
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
     let started = std::time::Instant::now();
-    while !killed.join("cloth_0004.obj").exists() {
+    while !stopped.join("cloth_0004.obj").exists() {
         assert!(started.elapsed().as_secs() < 300, "frame 4 never appeared");
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
-    child.kill().unwrap();
-    child.wait().unwrap();
+    let kill = Command::new("kill")
+        .args(["-s", signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
     assert!(
-        !killed.join("summary.json").exists(),
-        "the run finished before it could be killed"
+        !stopped.join("summary.json").exists(),
+        "the run finished before it could be stopped"
     );
-    // Whatever the kill interrupted, no half-written file is left under a final name.
-    for (name, bytes) in objs(&killed) {
+    // Whatever the signal interrupted, no half-written file is left under a final name.
+    for (name, bytes) in objs(&stopped) {
         let text = String::from_utf8(bytes).unwrap();
         assert!(text.ends_with('\n'), "{name} is cut short");
     }
-    run_ok(&[scene, "--out", killed_s, "--resume", "--quiet"]);
-    let (a, b) = (objs(&whole), objs(&killed));
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let temporaries = |dir: &Path| files(dir, |name| name.contains(".tmp-"));
+    let left = temporaries(&stopped);
+    run_ok(&[scene, "--out", stopped_s, "--resume", "--quiet"]);
+    assert!(
+        temporaries(&stopped).is_empty(),
+        "{left:?} were not removed"
+    );
+    let (a, b) = (objs(&whole), objs(&stopped));
     assert_eq!(a.len(), b.len());
     for (name, bytes) in &a {
         assert!(
             bytes == &b[name],
-            "{name} differs after the kill and resume"
+            "{name} differs after the {signal} and resume"
         );
     }
+    if signal == "INT" {
+        assert!(left.is_empty(), "Ctrl-C left {:?}", left.keys());
+    }
+    (out.status, stderr)
+}
+
+#[test]
+fn killed_and_resumed_run_writes_the_same_bytes() {
+    // SIGKILL: no chance to clean up.
+    stopped_and_resumed("kill", "KILL");
+}
+
+#[test]
+fn interrupted_run_stops_after_a_frame_and_resumes() {
+    let (status, stderr) = stopped_and_resumed("interrupt", "INT");
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("--resume continues"), "{stderr}");
+}
+
+#[test]
+fn stale_temporaries_of_its_own_files_are_removed() {
+    let dir = scratch("stale");
+    let scene = shot(&dir, &[]);
+    let scene = scene.to_str().unwrap();
+    let out = dir.join("out");
+    fs::create_dir_all(&out).unwrap();
+    let own = [".cloth_0003.obj.tmp-99999", ".tailor_checkpoint.bin.tmp-7"];
+    let others = [
+        ".notes.tmp-1",
+        ".cloth_0003.obj.tmp-x",
+        "cloth_0003.obj.tmp-5",
+    ];
+    for name in own.iter().chain(&others) {
+        fs::write(out.join(name), "stale").unwrap();
+    }
+    let o = run_ok(&[scene, "--out", out.to_str().unwrap(), "--frames", "..1"]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("removed 2 temporary file(s)"), "{stderr}");
+    for name in own {
+        assert!(!out.join(name).exists(), "{name} is still there");
+    }
+    for name in others {
+        assert!(out.join(name).exists(), "{name} was removed");
+    }
+    // Quietly with --quiet.
+    fs::write(out.join(own[0]), "stale").unwrap();
+    let o = run_ok(&[
+        scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--frames",
+        "..1",
+        "--quiet",
+    ]);
+    assert!(!out.join(own[0]).exists());
+    assert!(
+        o.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+#[test]
+fn a_fresh_run_removes_the_files_of_an_earlier_one() {
+    let dir = scratch("fresh");
+    let scene = shot(&dir, &[]);
+    let scene = scene.to_str().unwrap();
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    run_ok(&[scene, "--out", out_s, "--quiet"]);
+    fs::write(out.join("notes.txt"), "mine").unwrap();
+    let earlier = everything(&out).len() - 1;
+    // A shorter shot into the same directory: frames 4 to 10 of the longer one must go.
+    let o = run_ok(&[scene, "--out", out_s, "--frames", "..3"]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(&format!("removed {earlier} file(s) of an earlier run")),
+        "{stderr}"
+    );
+    let names: Vec<String> = everything(&out).into_keys().collect();
+    let mut expected = vec!["notes.txt".to_owned(), "summary.json".to_owned()];
+    for frame in 0..=3 {
+        for prefix in ["body", "cloth", "cloth_control"] {
+            expected.push(format!("{prefix}_{frame:04}.obj"));
+        }
+    }
+    expected.push("tailor_checkpoint.bin".to_owned());
+    expected.sort();
+    assert_eq!(names, expected);
+    // Resuming keeps them.
+    let o = run_ok(&[scene, "--out", out_s, "--resume"]);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("earlier run"));
+    assert!(out.join("cloth_0010.obj").exists());
 }
 
 #[test]

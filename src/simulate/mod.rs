@@ -20,10 +20,16 @@
 //! after every frame, the checkpoint and the summary are written, so a pipeline can stop on a
 //! bad shot and still look at it.
 //!
+//! Before the first frame, a run removes the temporaries that killed runs left in the output
+//! directory and, unless it resumes, the files of an earlier run there: its own files' only
+//! ([`outputs`]). Ctrl-C stops the run after the frame being
+//! written, with its checkpoint, exit status 130 ([`crate::interrupt`]).
+//!
 //! Work runs on a rayon pool of `--threads` threads; every parallel loop in the crates reduces
 //! in a fixed order, so the bytes written do not depend on the count.
 
 mod attach;
+mod outputs;
 mod quality;
 mod summary;
 mod surface;
@@ -42,7 +48,8 @@ use tailor_cloth::{Model, Motion, Settings, Simulator, State};
 use tailor_subdiv::Mesh;
 
 use crate::checkpoint::{self, Checkpoint, FrameStats};
-use crate::output::write_atomically;
+use crate::interrupt;
+use crate::output::{self, write_atomically};
 use crate::scene::{self, Scene};
 use attach::Bindings;
 use surface::Surface;
@@ -63,7 +70,10 @@ when the limit is 0) or tailor check's test finds a penetration or a self-inters
 failure is warned about on standard error (frames, worst value, where on the garment) and listed \
 under \"failures\" in summary.json. Exit status: 0 done (warnings or not), 1 bad scene or a \
 diverging simulation, 2 bad arguments, 3 with --strict or [scene] strict = true when a frame \
-failed its quality (everything is written first)."
+failed its quality (everything is written first), 130 stopped by Ctrl-C after a frame and its \
+checkpoint (--resume continues; a second Ctrl-C stops at once). Temporaries of these files \
+that a killed run left (.cloth_0020.obj.tmp-PID) are removed at the start of a run, and so are \
+these files of an earlier run unless resuming."
 )]
 pub struct Args {
     /// Scene file (TOML; see assets/scenes/cape.toml).
@@ -134,13 +144,16 @@ impl FromStr for FrameRange {
     }
 }
 
-/// Runs `tailor simulate`: exit 0, or 3 when strict and a frame failed its quality.
+/// Runs `tailor simulate`: exit 0, 3 when strict and a frame failed its quality, 130 when
+/// stopped by Ctrl-C.
 ///
 /// # Errors
 /// A bad scene, an unwritable output, or a diverging simulation.
 pub fn run(args: &Args) -> Result<ExitCode> {
     let outcome = run_in_pool(args)?;
-    Ok(if outcome.rejected {
+    Ok(if outcome.interrupted {
+        ExitCode::from(interrupt::STATUS)
+    } else if outcome.rejected {
         ExitCode::from(3)
     } else {
         ExitCode::SUCCESS
@@ -153,6 +166,8 @@ pub struct Outcome {
     pub dir: PathBuf,
     /// A frame failed its quality and the run is strict.
     pub rejected: bool,
+    /// Ctrl-C stopped the run after a frame and its checkpoint.
+    pub interrupted: bool,
 }
 
 /// Simulates the scene on a pool of `args.threads` threads.
@@ -204,6 +219,23 @@ fn simulate(args: &Args) -> Result<Outcome> {
         );
     }
     fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let stale = outputs::remove_temporaries(&dir)?;
+    if stale > 0 && !args.quiet {
+        eprintln!(
+            "note: removed {stale} temporary file(s) left in {} by an interrupted run",
+            dir.display()
+        );
+    }
+    if next == 0 {
+        let earlier = outputs::remove_earlier(&dir)?;
+        if earlier > 0 && !args.quiet {
+            eprintln!(
+                "note: removed {earlier} file(s) of an earlier run from {}",
+                dir.display()
+            );
+        }
+    }
+    interrupt::watch()?;
     if next > 0 {
         shot.pose_body(next - 1)?;
     }
@@ -242,14 +274,18 @@ fn simulate(args: &Args) -> Result<Outcome> {
             start.elapsed().as_secs_f64() * 1e3
         ));
         progress.inc(1);
-        if args.stop_after == Some(frame) {
+        let interrupted = interrupt::requested();
+        if interrupted || args.stop_after == Some(frame) {
             progress.abandon();
-            if !args.quiet {
+            if interrupted {
+                eprintln!("interrupted after frame {frame} and its checkpoint; --resume continues");
+            } else if !args.quiet {
                 eprintln!("stopped after frame {frame}, as asked");
             }
             return Ok(Outcome {
                 dir,
                 rejected: false,
+                interrupted,
             });
         }
     }
@@ -260,11 +296,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
         &scene.cloth.doc,
         &shot.cloth,
     );
-    summary::report(&scene.path, &dir, scene.cloth.thickness, &stats, &failures)?;
-    println!(
-        "frames {first} to {last}: {}",
-        dir.join("cloth_####.obj").display()
-    );
+    let summary = summary::report(&scene.path, &dir, scene.cloth.thickness, &stats, &failures)?;
     for failure in &failures {
         eprintln!("warning: {failure}");
     }
@@ -279,7 +311,16 @@ fn simulate(args: &Args) -> Result<Outcome> {
             }
         );
     }
-    Ok(Outcome { dir, rejected })
+    // Last, so that a reader of standard output going away early loses nothing else.
+    output::print(&format!(
+        "{summary}frames {first} to {last}: {}\n",
+        dir.join("cloth_####.obj").display()
+    ))?;
+    Ok(Outcome {
+        dir,
+        rejected,
+        interrupted: false,
+    })
 }
 
 /// A progress bar on standard error with frame, ms/frame and ETA; hidden when standard error

@@ -1,5 +1,5 @@
 //! The end-of-run summary: time per frame, the worst edge strain, and what `tailor check`'s
-//! test finds (body penetrations, self-intersections), on standard output and as
+//! test finds (body penetrations, self-intersections), for standard output and as
 //! `summary.json` in the output directory, with the frames that failed their quality
 //! ([`super::quality`]) under `failures`.
 
@@ -13,8 +13,11 @@ use crate::output::write_atomically;
 
 use super::quality::{self, Failure};
 
-/// Prints the summary of `stats` (every frame simulated so far) and writes `summary.json`,
-/// `failures` the frames that failed their quality.
+/// The summary's file name.
+pub const FILE: &str = "summary.json";
+
+/// Writes `summary.json` of `stats` (every frame simulated so far), `failures` the frames
+/// that failed their quality, and returns the summary's lines for standard output.
 ///
 /// # Errors
 /// When `summary.json` cannot be written.
@@ -24,7 +27,7 @@ pub fn report(
     thickness: f64,
     stats: &[FrameStats],
     failures: &[Failure],
-) -> Result<()> {
+) -> Result<String> {
     let stepped: Vec<&FrameStats> = stats.iter().filter(|s| s.frame > 0).collect();
     let total_ms: f64 = stepped.iter().map(|s| s.ms).sum();
     let mean_ms = total_ms / stepped.len().max(1) as f64;
@@ -43,22 +46,6 @@ pub fn report(
         .map(|s| s.findings.self_intersecting_pairs)
         .sum();
     let dirty = stats.iter().filter(|s| !s.findings.is_clean()).count();
-    println!(
-        "{}: {} frames simulated in {:.1} s ({mean_ms:.0} ms per frame)",
-        scene.display(),
-        stepped.len(),
-        total_ms / 1e3
-    );
-    println!(
-        "worst edge strain {:.2}% (frame {})",
-        worst.max_strain * 100.0,
-        worst.frame
-    );
-    println!(
-        "tailor check (thickness {thickness} m): {penetrating} penetrating vertices (deepest \
-         {deepest:.4} m), {crossing} self-intersecting face pairs, {dirty} of {} frames not clean",
-        stats.len()
-    );
     let frames: Vec<_> = stats
         .iter()
         .map(|s| {
@@ -90,8 +77,21 @@ pub fn report(
         "failures": quality::json(failures),
     });
     let text = serde_json::to_string_pretty(&summary)? + "\n";
-    let path = dir.join("summary.json");
+    let path = dir.join(FILE);
     write_atomically(&path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
-    println!("summary: {}", path.display());
-    Ok(())
+    Ok(format!(
+        "{}: {} frames simulated in {:.1} s ({mean_ms:.0} ms per frame)\n\
+         worst edge strain {:.2}% (frame {})\n\
+         tailor check (thickness {thickness} m): {penetrating} penetrating vertices (deepest \
+         {deepest:.4} m), {crossing} self-intersecting face pairs, {dirty} of {} frames not \
+         clean\n\
+         summary: {}\n",
+        scene.display(),
+        stepped.len(),
+        total_ms / 1e3,
+        worst.max_strain * 100.0,
+        worst.frame,
+        stats.len(),
+        path.display()
+    ))
 }
