@@ -37,7 +37,7 @@
 
 use tailor_cloth::energy::Vec3;
 use tailor_cloth::shapes::{cylinder, disc, drape_coefficient};
-use tailor_cloth::{Material, Model, Settings, Simulator, State};
+use tailor_cloth::{Integrator, Material, Model, Settings, Simulator, State};
 use tailor_subdiv::Point;
 
 const FPS: f64 = 24.0;
@@ -60,6 +60,8 @@ fn drape(substeps: u32, seconds: u32) -> (f64, f64) {
         thickness,
         friction: 0.3,
         self_collision: true,
+        // What a `tailor` scene steps with.
+        integrator: Integrator::Bdf2,
         ..Settings::default()
     };
     let mut sim = Simulator::new(model, settings).unwrap();
