@@ -69,6 +69,20 @@ impl Default for SceneSection {
     }
 }
 
+/// Most frames a second: above it a frame is shorter than any motion a body file carries
+/// (and `fps = 1e308` made the substep zero).
+const MAX_FPS: f64 = 10_000.0;
+
+/// The last frame a run may simulate: 11.5 hours at 24 fps, and far from `u32`'s end.
+const MAX_FRAMES: u32 = 1_000_000;
+
+/// Most substeps a frame: a thousand at 24 fps is a substep of 42 µs, past anything the
+/// solver's accuracy can use (and 4294967295 ran for ever).
+const MAX_SUBSTEPS: u32 = 1000;
+
+/// Largest gravity component, m/s²: a thousand g.
+const MAX_GRAVITY: f64 = 9_810.0;
+
 /// `[scene] integrator`: the names of [`Integrator`]'s choices.
 #[derive(Deserialize, Debug, Clone, Copy)]
 #[serde(rename_all = "kebab-case")]
@@ -358,14 +372,39 @@ pub fn load(path: &Path, last_frame: Option<u32>) -> Result<Scene> {
     let at = |key: &str| format!("{name}: {key}");
     let scene = &file.scene;
     positive(scene.fps, &at("[scene] fps"))?;
-    if scene.substeps == 0 {
-        bail!("{}: must be at least 1", at("[scene] substeps"));
+    if scene.fps > MAX_FPS {
+        bail!(
+            "{}: {} is above {MAX_FPS} frames a second",
+            at("[scene] fps"),
+            scene.fps
+        );
     }
-    if !scene.gravity.iter().all(|g| g.is_finite()) {
-        bail!("{}: must be finite", at("[scene] gravity"));
+    let last = last_frame.unwrap_or(scene.frames);
+    if last > MAX_FRAMES {
+        let asked = match last_frame {
+            Some(_) => "--frames".to_owned(),
+            None => at("[scene] frames"),
+        };
+        bail!("{asked}: frame {last} is past {MAX_FRAMES}, the most a run simulates");
+    }
+    if !(1..=MAX_SUBSTEPS).contains(&scene.substeps) {
+        bail!(
+            "{}: {} is not between 1 and {MAX_SUBSTEPS}",
+            at("[scene] substeps"),
+            scene.substeps
+        );
+    }
+    if !scene
+        .gravity
+        .iter()
+        .all(|g| g.is_finite() && g.abs() <= MAX_GRAVITY)
+    {
+        bail!(
+            "{}: each component must be finite and at most {MAX_GRAVITY} m/s² in size",
+            at("[scene] gravity")
+        );
     }
     let cloth = cloth(&file.cloth, base, &at)?;
-    let last = last_frame.unwrap_or(scene.frames);
     let body = file
         .body
         .as_ref()
@@ -583,16 +622,27 @@ impl<'a> Groups<'a> {
 fn body(b: &BodySection, base: &Path, last: u32, at: &dyn Fn(&str) -> String) -> Result<Body> {
     let path = base.join(&b.mesh);
     let place = at("[body] mesh");
-    let files: Vec<PathBuf> = match Pattern::parse(&path) {
-        Some(pattern) => (0..=last)
-            .map(|k| pattern.path(b.first_frame + k))
-            .collect(),
-        None => vec![path.clone()],
-    };
-    for file in &files {
-        if !file.is_file() {
-            bail!("{place}: {} does not exist", file.display());
+    // Paths are made one by one and checked as they come, so that a scene asking for more
+    // frames than there are files stops at the first missing one, whatever it asks.
+    let mut files: Vec<PathBuf> = Vec::new();
+    match Pattern::parse(&path) {
+        Some(pattern) => {
+            for k in 0..=last {
+                let Some(number) = b.first_frame.checked_add(k) else {
+                    bail!(
+                        "{place}: frame {} + {k} is past the last frame number",
+                        b.first_frame
+                    );
+                };
+                let file = pattern.path(number);
+                if !file.is_file() {
+                    bail!("{place}: {} does not exist", file.display());
+                }
+                files.push(file);
+            }
         }
+        None if path.is_file() => files.push(path.clone()),
+        None => bail!("{place}: {} does not exist", path.display()),
     }
     let first = obj::read(&files[0]).with_context(|| place.clone())?;
     let rest = first.mesh;

@@ -544,6 +544,32 @@ fn bad_input_is_refused_before_anything_is_written() {
         ),
         (&[("density = 0.2", "density = 0.0")], &["[cloth] density"]),
         (
+            &[("frames = 10", "frames = 4294967295")],
+            &["[scene] frames", "past 1000000"],
+        ),
+        (
+            &[
+                ("frames = 10", "frames = 1000000"),
+                (
+                    "mesh = \"cube.obj\"",
+                    "mesh = \"seq/body_####.obj\"\nfirst_frame = 0",
+                ),
+            ],
+            &["[body] mesh", "body_0003.obj does not exist"],
+        ),
+        (
+            &[("substeps = 4", "substeps = 4294967295")],
+            &["[scene] substeps", "4294967295 is not between 1 and 1000"],
+        ),
+        (
+            &[("fps = 24", "fps = 1e308")],
+            &["[scene] fps", "above 10000"],
+        ),
+        (
+            &[("fps = 24", "fps = 24\ngravity = [0, -1e300, 0]")],
+            &["[scene] gravity", "at most 9810"],
+        ),
+        (
             &[("thickness = 0.01", "thickness = 0")],
             &["[cloth] thickness", "> 0"],
         ),
