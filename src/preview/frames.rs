@@ -13,6 +13,10 @@ use crate::sequence::Pattern;
 /// How many frames the sheet shows when `--frames` is not given.
 const DEFAULT_COUNT: usize = 12;
 
+/// Most frames a `--frames` list may name: counted before any is listed, so that
+/// `0-4294967295` is an error, not a 16 GB allocation.
+const MAX_LISTED: u64 = 10_000;
+
 /// The cloth file pattern in a simulation output directory.
 pub const CLOTH: &str = "cloth_####.obj";
 /// The body file pattern in a simulation output directory.
@@ -46,6 +50,13 @@ impl FromStr for FrameList {
                     let (first, last) = (number(first)?, number(last)?);
                     if last < first {
                         return Err(format!("{item:?}: the range runs backwards"));
+                    }
+                    let count = u64::from(last - first) / u64::from(step) + 1;
+                    if frames.len() as u64 + count > MAX_LISTED {
+                        return Err(format!(
+                            "{item:?}: names {count} frames; a contact sheet shows at most \
+                             {MAX_LISTED}"
+                        ));
                     }
                     frames.extend((first..=last).step_by(step as usize));
                 }
@@ -161,7 +172,18 @@ mod tests {
         assert_eq!(list("3-6"), Ok(vec![3, 4, 5, 6]));
         assert_eq!(list("0-120x30,5"), Ok(vec![0, 30, 60, 90, 120, 5]));
         assert_eq!(list("0-10x4"), Ok(vec![0, 4, 8]));
-        for bad in ["", "a", "5-3", "0-10x0", "4x2", "-3", "1,,2"] {
+        assert_eq!(list("0-9999").map(|l| l.len()), Ok(10_000));
+        for bad in [
+            "",
+            "a",
+            "5-3",
+            "0-10x0",
+            "4x2",
+            "-3",
+            "1,,2",
+            "0-4294967295",
+            "0-10000",
+        ] {
             assert!(list(bad).is_err(), "{bad}");
         }
     }
