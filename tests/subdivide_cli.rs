@@ -163,3 +163,41 @@ fn failed_run_keeps_the_previous_output() {
     assert_eq!(o.status.code(), Some(1));
     assert_eq!(fs::read_to_string(&out).unwrap(), "previous");
 }
+
+#[test]
+fn a_refinement_larger_than_memory_is_refused_before_it_starts() {
+    // Under a 1 GB address-space limit (`ulimit -v`), level 7 of the cape (7.9 M faces, about
+    // 5 GB) is refused with what it needs; level 3 goes through. Without the estimate the
+    // refinement aborted on a failed allocation.
+    let dir = scratch("memory");
+    fs::create_dir_all(&dir).unwrap();
+    let cape = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/garments/cape.obj");
+    let limited = |level: &str| {
+        let out = dir.join(format!("cape_{level}.obj"));
+        Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v 1000000 && exec \"$0\" subdivide \"$1\" -l {level} -o \"$2\""
+            ))
+            .arg(env!("CARGO_BIN_EXE_tailor"))
+            .arg(&cape)
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let refused = limited("7");
+    let error = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{error}");
+    assert!(
+        error.contains("makes 7864320 faces and needs about 5.0 GB")
+            && error.contains("GB is available"),
+        "{error}"
+    );
+    assert!(!dir.join("cape_7.obj").exists());
+    let small = limited("3");
+    assert!(
+        small.status.success(),
+        "{}",
+        String::from_utf8_lossy(&small.stderr)
+    );
+}
