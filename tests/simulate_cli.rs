@@ -697,6 +697,29 @@ fn strained_shot_warns_and_exits_3_only_when_strict() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(objs(&keyed) == objs(&lenient));
+    // A reader of standard output gone away does not change what a strict run owes.
+    let piped = dir.join("piped");
+    let child = Command::new(env!("CARGO_BIN_EXE_tailor"))
+        .args([
+            "simulate",
+            scene,
+            "--out",
+            piped.to_str().unwrap(),
+            "--quiet",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut child = child;
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 
     // Resumed, frames 2 and 3 are judged from the checkpoint and give the same failures.
     let parts = dir.join("parts");

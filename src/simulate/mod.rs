@@ -311,11 +311,16 @@ fn simulate(args: &Args) -> Result<Outcome> {
             }
         );
     }
-    // Last, so that a reader of standard output going away early loses nothing else.
-    output::print(&format!(
+    // Last, so that a reader of standard output going away early loses nothing else; and a
+    // reader gone away does not change the exit status a strict run owes.
+    let printed = output::print(&format!(
         "{summary}frames {first} to {last}: {}\n",
         dir.join("cloth_####.obj").display()
-    ))?;
+    ));
+    match printed {
+        Err(err) if !output::stdout_closed(&err) => return Err(err),
+        _ => {}
+    }
     Ok(Outcome {
         dir,
         rejected,
