@@ -1,4 +1,4 @@
-//! Issue 4's drape scenario, frame by frame: a 2 m square sheet of n² vertices falling 0.5 m
+//! The sphere drape, frame by frame: a 2 m square sheet of n² vertices falling 0.5 m
 //! onto a sphere of radius 0.5 m, 60 frames at 24 fps (the default substeps, or `--substeps`
 //! a frame). Prints per frame the time, the solver's work (Newton and CG iterations), the
 //! contacts, the fail-safe's impacts and the worst edge strain, then the totals: the figures

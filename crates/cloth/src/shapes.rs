@@ -33,7 +33,7 @@ pub fn sheet(columns: u32, rows: u32, width: f64, depth: f64) -> Mesh {
 }
 
 /// A square [`sheet`] of `n × n` vertices and side `side`, flat at y = 0 and centred over the
-/// origin in x and z: the garment of issue 4's drape.
+/// origin in x and z: the garment of the sphere drape (`examples/drape.rs`).
 ///
 /// # Panics
 /// If `n` is below 2.

@@ -1,4 +1,4 @@
-//! Scenarios with collisions (issue 4): every frame, no cloth vertex closer to the obstacle than
+//! Scenarios with collisions: every frame, no cloth vertex closer to the obstacle than
 //! half the thickness (nor inside it), no self-intersecting face pairs (the test `tailor check`
 //! runs), edge stretch l/L − 1 at most 10% (the simulator's default strain limit), nothing
 //! non-finite. Compression is left out: the limiter bounds it too, but the self-collision
@@ -93,7 +93,7 @@ fn drape(n: u32, fps: f64, frames: u32, settings: Settings, check: bool) -> (Sta
     (state, sim)
 }
 
-/// The drape of issue 4 with `n`² vertices (odd `n` puts a vertex at the centre), 60 frames at
+/// The sphere drape with `n`² vertices (odd `n` puts a vertex at the centre), 60 frames at
 /// 24 fps, checked every frame.
 fn sheet_drapes_over_a_sphere(n: u32, self_collision: bool) {
     let settings = Settings {
