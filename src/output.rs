@@ -59,10 +59,7 @@ fn stdout_error(err: io::Error) -> anyhow::Error {
 /// # Errors
 /// As [`write_to`] with `-`.
 pub fn print(text: &str) -> Result<()> {
-    let mut out = io::stdout().lock();
-    out.write_all(text.as_bytes())
-        .and_then(|()| out.flush())
-        .map_err(stdout_error)
+    write_to(Path::new("-"), |w| w.write_all(text.as_bytes()))
 }
 
 /// Writes `path` atomically with the bytes `write` produces.

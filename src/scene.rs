@@ -280,22 +280,13 @@ impl Fingerprint {
     /// The first entry, by name, that `self` and `other` do not share with the same hash.
     #[must_use]
     pub fn first_difference<'a>(&'a self, other: &'a Self) -> Option<&'a str> {
-        let (mut a, mut b) = (self.0.iter().peekable(), other.0.iter().peekable());
-        loop {
-            match (a.peek(), b.peek()) {
-                (None, None) => return None,
-                (Some((x, _)), None) | (None, Some((x, _))) => return Some(x),
-                (Some((x, hx)), Some((y, hy))) => match x.cmp(y) {
-                    std::cmp::Ordering::Less => return Some(x),
-                    std::cmp::Ordering::Greater => return Some(y),
-                    std::cmp::Ordering::Equal if hx != hy => return Some(x),
-                    std::cmp::Ordering::Equal => {
-                        a.next();
-                        b.next();
-                    }
-                },
-            }
-        }
+        let hash = |of: &Self, name: &str| of.0.iter().find(|(n, _)| n == name).map(|e| e.1);
+        self.0
+            .iter()
+            .chain(&other.0)
+            .map(|(name, _)| name.as_str())
+            .filter(|name| hash(self, name) != hash(other, name))
+            .min()
     }
 }
 

@@ -1,6 +1,6 @@
-//! Time stepping: implicit BDF2 (the default) or Baraff & Witkin's backward Euler, with Newton
-//! iterations and a line search when asked, substeps in seconds, retries on failure, and a
-//! symplectic Euler step.
+//! Time stepping: implicit BDF2 or Baraff & Witkin's backward Euler ([`Settings::integrator`]),
+//! with Newton iterations and a line search when asked, substeps in seconds, retries on
+//! failure, and a symplectic Euler step.
 //!
 //! Backward Euler solves M (v₁ − v₀) = h f(x₀ + h v₁, v₁). Baraff & Witkin ("Large Steps in
 //! Cloth Simulation", 1998, §4, eq. 16) linearize f once and solve
@@ -36,7 +36,7 @@
 //!   Φ(v) = ½ (v − v̂)ᵀ M (v − v̂) + U(x̂ + ĥ v) + ĥ D(v),
 //!
 //! (U elastic + gravitational energy, D the dissipation function of dampers and drag, damper
-//! directions frozen at x₀), so with `line_search` each step length is halved until Φ
+//! directions frozen over the substep: `Work::frozen`), so with `line_search` each step length is halved until Φ
 //! decreases enough (Armijo). Stiffness Hessians are projected to PSD ([`crate::energy`]), so
 //! the matrix is SPD, CG converges and every Newton direction descends.
 //!
@@ -370,7 +370,7 @@ impl Simulator {
             settings.project_hessians,
         );
         Ok(Self {
-            collisions: Collisions::new(&model)?,
+            collisions: Collisions::new(&model, &settings)?,
             strain_limiter: StrainLimiter::new(&model.springs, n),
             constraints: Constraints::new(n),
             pcg: Pcg::new(&assembly.matrix),

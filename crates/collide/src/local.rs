@@ -27,6 +27,7 @@ use rayon::prelude::*;
 use crate::error::CollideError;
 use crate::hierarchy::Hierarchy;
 use crate::proximity::Neighbours;
+use crate::topology::group_by_owner;
 
 /// For each vertex of a mesh, a sorted list of faces: a CSR table. The empty table (its
 /// default) lists nothing for any vertex.
@@ -105,24 +106,14 @@ impl Hierarchy {
             .collect()
     }
 
-    /// The faces using each vertex, sorted (a counting sort over the faces' corners).
+    /// The faces using each vertex, sorted (the corners grouped by their vertex, in order).
     fn vertex_faces(&self) -> LocalFaces {
         let t = &self.topology;
-        let mut offsets = vec![0u32; t.vertex_count + 1];
-        for &v in &t.face_vertices {
-            offsets[v as usize + 1] += 1;
-        }
-        for v in 0..t.vertex_count {
-            offsets[v + 1] += offsets[v];
-        }
-        let mut cursor = offsets.clone();
-        let mut faces = vec![0u32; t.face_vertices.len()];
-        for f in 0..t.face_count() as u32 {
-            for &v in t.face(f) {
-                faces[cursor[v as usize] as usize] = f;
-                cursor[v as usize] += 1;
-            }
-        }
+        let (offsets, corners) = group_by_owner(&t.face_vertices, t.vertex_count);
+        let corner_face: Vec<u32> = (0..t.face_count() as u32)
+            .flat_map(|f| std::iter::repeat_n(f, t.face(f).len()))
+            .collect();
+        let faces = corners.iter().map(|&k| corner_face[k as usize]).collect();
         LocalFaces { offsets, faces }
     }
 }

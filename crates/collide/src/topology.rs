@@ -208,7 +208,7 @@ fn uniform_fan(face_offsets: &[u32]) -> Option<u32> {
 }
 
 /// Groups item indices by owner (counting sort); owners `u32::MAX` (none) are left out.
-fn group_by_owner(owner: &[u32], owners: usize) -> (Vec<u32>, Vec<u32>) {
+pub(crate) fn group_by_owner(owner: &[u32], owners: usize) -> (Vec<u32>, Vec<u32>) {
     let mut offsets = vec![0u32; owners + 1];
     for &o in owner.iter().filter(|&&o| o != u32::MAX) {
         offsets[o as usize + 1] += 1;

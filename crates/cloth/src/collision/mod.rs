@@ -87,8 +87,6 @@ pub(crate) struct Collisions {
     /// The refined surface that must clear the obstacle, when the caller gave one.
     pub surface: Option<Surface>,
     cloth: Hierarchy,
-    /// The model's rest positions, where self repulsion finds the pairs it leaves alone.
-    rest: Vec<Point>,
     /// The body contacts of the current substep.
     pub contacts: Vec<Contact>,
     /// Vertices whose contact pulled them towards the body in the last substep.
@@ -184,18 +182,24 @@ impl Motion<'_> {
 }
 
 impl Collisions {
-    /// No obstacle yet; the garment's hierarchy built at rest.
-    pub fn new(model: &Model) -> Result<Self, ClothError> {
+    /// No obstacle yet; the garment's hierarchy built at rest, and with self-collision the
+    /// pairs its rest shape puts near each other, which repulsion leaves alone.
+    pub fn new(model: &Model, settings: &Settings) -> Result<Self, ClothError> {
         let n = model.vertex_count();
+        let mut cloth = Hierarchy::build(&model.rest, &model.face_offsets, &model.face_vertices)?;
+        let layers = if settings.self_collision {
+            self_collision::Buffers::new(&mut cloth, &model.rest, settings.thickness)?
+        } else {
+            self_collision::Buffers::default()
+        };
         Ok(Self {
             obstacle: None,
             surface: None,
-            cloth: Hierarchy::build(&model.rest, &model.face_offsets, &model.face_vertices)?,
-            rest: model.rest.clone(),
+            cloth,
             contacts: Vec::new(),
             pulling: vec![false; n],
             held: Vec::with_capacity(n),
-            layers: self_collision::Buffers::default(),
+            layers,
             moved: vec![false; n],
             before: Vec::with_capacity(n),
             own_velocity: Vec::with_capacity(n),
@@ -294,7 +298,6 @@ impl Collisions {
             let mut layers = motion.weighted(&self.held);
             self_collision::repel(
                 &mut self.cloth,
-                &self.rest,
                 settings.thickness,
                 &mut layers,
                 &mut self.layers,

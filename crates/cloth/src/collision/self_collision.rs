@@ -65,25 +65,39 @@ const REST_MARGIN: f64 = 1.5;
 const SEPARATION: f64 = 0.1;
 
 /// The answers of the self-collision queries, kept from substep to substep so that each query
-/// refills them instead of allocating.
+/// refills them instead of allocating, and the pairs repulsion leaves alone.
 #[derive(Clone, Debug, Default)]
 pub(super) struct Buffers {
-    /// The faces around each vertex in the rest shape that repulsion skips, and the
-    /// thickness they were found for.
-    local: Option<(f64, LocalFaces)>,
+    /// The faces around each vertex in the rest shape that repulsion skips.
+    local: LocalFaces,
     near: Neighbours,
     impacts: Impacts,
     /// The vertices an impulse round changed.
     touched: Vec<bool>,
 }
 
+impl Buffers {
+    /// Empty buffers, and the faces around each vertex within [`REST_MARGIN`] times
+    /// `thickness` at the `rest` positions (see the module docs), which repulsion skips.
+    pub(super) fn new(
+        cloth: &mut Hierarchy,
+        rest: &[Point],
+        thickness: f64,
+    ) -> Result<Self, CollideError> {
+        cloth.refit(rest, 0.0)?;
+        Ok(Self {
+            local: cloth.local_faces(REST_MARGIN * thickness)?,
+            ..Self::default()
+        })
+    }
+}
+
 /// Repulsion: every vertex within `thickness` of a face at the start of the substep stops
 /// approaching it and separates by a tenth of the overlap per substep, except the faces
-/// around it within [`REST_MARGIN`] thicknesses at the `rest` positions (see the module
-/// docs); `moved` flags the vertices whose velocities it changed.
+/// around it in the rest shape that `buffers` lists (see the module docs); `moved` flags the
+/// vertices whose velocities it changed.
 pub(super) fn repel(
     cloth: &mut Hierarchy,
-    rest: &[Point],
     thickness: f64,
     m: &mut Motion,
     buffers: &mut Buffers,
@@ -91,15 +105,6 @@ pub(super) fn repel(
 ) -> Result<(), CollideError> {
     moved.fill(false);
     let Buffers { local, near, .. } = buffers;
-    let local = match local {
-        Some((found_for, faces)) if *found_for == thickness => &*faces,
-        slot => {
-            cloth.refit(rest, 0.0)?;
-            &slot
-                .insert((thickness, cloth.local_faces(REST_MARGIN * thickness)?))
-                .1
-        }
-    };
     cloth.refit(m.x0, 0.0)?;
     cloth.self_proximity_into(thickness, local, near)?;
     let triangles = cloth.triangles();
