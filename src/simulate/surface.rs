@@ -1,6 +1,7 @@
-//! Refined surfaces evaluated every frame through stencils built once (OpenSubdiv's `Far`
-//! split: topology once, a sparse gather per frame), with the collision hierarchy that
-//! `tailor check`'s test and the attachments query.
+//! Refined surfaces evaluated every frame through an [`Evaluator`] built once (OpenSubdiv's
+//! `Far` split: topology once, per frame bicubic patches on regular faces and a sparse gather
+//! of stencil rows elsewhere), with the collision hierarchy that `tailor check`'s test and the
+//! attachments query.
 //!
 //! Both the garment (for `cloth_####.obj`) and the body (for attachment, collision and the
 //! check) are Catmull-Clark control meshes. The body is refined to `[body] subdivision_level`,
@@ -21,13 +22,15 @@ use anyhow::{Context, Result};
 use nalgebra::Vector3;
 use tailor_collide::Hierarchy;
 use tailor_subdiv::obj::{self, Group};
-use tailor_subdiv::{Mesh, Point, Refiner, StencilTable};
+use tailor_subdiv::{Evaluator, Mesh, Point, Refiner, StencilTable};
 
 use crate::output::write_atomically;
 
 /// A refined surface of a fixed control topology.
 pub struct Surface {
-    stencils: StencilTable,
+    /// The refined points over the control points: regular faces as bicubic patches, stencil
+    /// rows elsewhere (the same points as the stencil table's, faster).
+    evaluator: Evaluator,
     /// Limit tangent stencils, when normals are written.
     tangents: Option<[StencilTable; 2]>,
     mesh: Mesh,
@@ -44,7 +47,7 @@ impl Surface {
     /// When the refined mesh cannot carry a collision hierarchy.
     pub fn new(control: &Mesh, level: u32, normals: bool) -> Result<Self> {
         let refiner = Refiner::new(control, level as usize);
-        let stencils = refiner.stencils();
+        let evaluator = refiner.evaluator();
         let tangents = normals.then(|| {
             let [_, t1, t2] = refiner.limit_stencils();
             [t1, t2]
@@ -52,14 +55,14 @@ impl Surface {
         let uvs = control
             .uvs()
             .and_then(|uvs| refiner.refine_uvs(&uvs.values));
-        let mut positions = vec![Point::origin(); stencils.len()];
-        stencils.apply(control.positions(), &mut positions);
+        let mut positions = vec![Point::origin(); evaluator.len()];
+        evaluator.apply(control.positions(), &mut positions);
         let mesh = refiner.refined_mesh(positions, uvs);
         let hierarchy =
             Hierarchy::build(mesh.positions(), mesh.face_offsets(), mesh.face_vertices())
                 .context("building the collision hierarchy of a refined surface")?;
         Ok(Self {
-            stencils,
+            evaluator,
             tangents,
             mesh,
             hierarchy,
@@ -73,10 +76,11 @@ impl Surface {
     #[must_use]
     pub fn control_vertex(&self, v: u32) -> Option<u32> {
         let v = v as usize;
-        if v >= self.stencils.len() {
+        let stencils = self.evaluator.stencils();
+        if v >= stencils.len() {
             return None;
         }
-        let (columns, weights) = self.stencils.rows.row(v);
+        let (columns, weights) = stencils.rows.row(v);
         let heaviest = columns.iter().zip(weights).reduce(|best, next| {
             let better = next.1 > best.1 || (next.1 == best.1 && next.0 < best.0);
             if better { next } else { best }
@@ -106,14 +110,14 @@ impl Surface {
     /// The stencils of the refined points over the control points.
     #[must_use]
     pub fn stencils(&self) -> &StencilTable {
-        &self.stencils
+        self.evaluator.stencils()
     }
 
     /// The refined positions for control points `control`.
     #[must_use]
     pub fn refine(&self, control: &[Point]) -> Vec<Point> {
-        let mut out = vec![Point::origin(); self.stencils.len()];
-        self.stencils.apply(control, &mut out);
+        let mut out = vec![Point::origin(); self.evaluator.len()];
+        self.evaluator.apply(control, &mut out);
         out
     }
 
