@@ -56,6 +56,9 @@ pub struct Args {
     /// faces in the file's order, when found).
     #[arg(long, value_name = "REPORT.json")]
     pub json: Option<PathBuf>,
+    /// Print a line for every frame of a sequence, not only for the frames with findings.
+    #[arg(long, short)]
+    pub verbose: bool,
 }
 
 /// What one frame has wrong.
@@ -183,8 +186,9 @@ fn check(args: &Args) -> Result<bool> {
         total.penetrating_vertices += found.penetrating_vertices;
         total.max_penetration = total.max_penetration.max(found.max_penetration);
         total.self_intersecting_pairs += found.self_intersecting_pairs;
-        if frames.len() > 1 {
-            output::print(&(line(&format!("frame {frame}"), &found, deepest) + "\n"))?;
+        if frames.len() > 1 && (args.verbose || !found.is_clean()) {
+            let what = format!("frame {frame}");
+            output::print(&(line(&what, &found, deepest, body_h.is_some()) + "\n"))?;
         }
         rows.push((*frame, found, deepest));
     }
@@ -194,13 +198,16 @@ fn check(args: &Args) -> Result<bool> {
         [(_, only, deepest)] => (*only, *deepest),
         _ => (total, None),
     };
-    output::print(
-        &(line(
-            &format!("{} frame(s) checked", frames.len()),
-            &total,
-            deepest,
-        ) + "\n"),
-    )?;
+    let what = match (
+        frames.len(),
+        rows.iter().filter(|r| !r.1.is_clean()).count(),
+    ) {
+        (1, _) => "1 frame checked".to_owned(),
+        (n, 0) => format!("{n} frames checked, all clean"),
+        (n, found) => format!("{n} frames checked, {found} with findings"),
+    };
+    let against = args.against.is_some();
+    output::print(&(line(&what, &total, deepest, against) + "\n"))?;
     if let Some(path) = &args.json {
         let report = json!({
             "frames": rows.iter().map(|(frame, f, deepest)| {
@@ -265,17 +272,26 @@ fn clearances(body: &Hierarchy, cloth: &[Point3<f64>], thickness: f64) -> Result
 }
 
 /// A summary line; a frame's names where its deepest vertex is and its first crossing pair.
-fn line(what: &str, f: &Findings, deepest: Option<[f64; 3]>) -> String {
-    let at = deepest.map_or(String::new(), |[x, y, z]| {
-        format!(" at ({x:.3}, {y:.3}, {z:.3})")
-    });
+/// Depths are in millimetres; without a body (`against` false) the line says penetration was
+/// not checked rather than counting none.
+fn line(what: &str, f: &Findings, deepest: Option<[f64; 3]>, against: bool) -> String {
     let first = f.crossing_faces.map_or(String::new(), |[a, b]| {
         format!(" (first: faces {a} and {b})")
     });
+    let crossings = format!(
+        "{} self-intersecting face pairs{first}",
+        f.self_intersecting_pairs
+    );
+    if !against {
+        return format!("{what}: {crossings}; no body given (--against), penetration not checked");
+    }
+    let at = deepest.map_or(String::new(), |[x, y, z]| {
+        format!(" at ({x:.3}, {y:.3}, {z:.3})")
+    });
     format!(
-        "{what}: {} penetrating vertices (deepest {:.6} m{at}), {} self-intersecting face \
-         pairs{first}",
-        f.penetrating_vertices, f.max_penetration, f.self_intersecting_pairs
+        "{what}: {} penetrating vertices (deepest {:.2} mm{at}), {crossings}",
+        f.penetrating_vertices,
+        f.max_penetration * 1e3
     )
 }
 

@@ -67,14 +67,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     )?;
     writeln!(out, "  groups           {}", doc.groups.len())?;
     let (lo, hi) = bounds(mesh.positions());
+    let [lo, hi] = [lo, hi].map(|corner| readable(corner, lo.iter().chain(&hi)));
+    writeln!(out, "  bounding box     [{lo}] .. [{hi}]")?;
     writeln!(
         out,
-        "  bounding box     [{}, {}, {}] .. [{}, {}, {}]",
-        lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
-    )?;
-    writeln!(
-        out,
-        "  options          boundary {}, creases {}, triangles {}, uvs {}",
+        "  options          boundary {}, creases {}, triangles {}, fvar-linear {}",
         mesh.options.boundary,
         mesh.options.crease_method,
         mesh.options.triangle_rule,
@@ -107,6 +104,37 @@ fn sharpness_summary(values: impl Iterator<Item = f64>) -> String {
     let min = v.iter().copied().fold(f64::INFINITY, f64::min);
     let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     format!("{} (sharpness {min} to {max})", v.len())
+}
+
+/// The coordinates of `corner` with six significant digits of the largest of `all` (the same
+/// number of decimals for every coordinate, so the columns line up), not the 17 digits that
+/// round-trip an `f64`.
+fn readable<'a>(corner: [f64; 3], all: impl Iterator<Item = &'a f64>) -> String {
+    let largest = all
+        .map(|x| x.abs())
+        .filter(|x| x.is_finite())
+        .fold(0.0, f64::max);
+    let whole_digits = if largest >= 1.0 {
+        largest.log10().floor() as i32 + 1
+    } else {
+        1
+    };
+    let decimals = (6 - whole_digits).clamp(0, 12) as usize;
+    corner
+        .map(|x| {
+            let text = format!("{x:.decimals$}");
+            // "-0.00000" is zero.
+            if text
+                .trim_start_matches('-')
+                .trim_matches(|c| c == '0' || c == '.')
+                .is_empty()
+            {
+                text.trim_start_matches('-').to_owned()
+            } else {
+                text
+            }
+        })
+        .join(", ")
 }
 
 fn bounds(points: &[tailor_subdiv::Point]) -> ([f64; 3], [f64; 3]) {

@@ -119,7 +119,7 @@ fn penetrating_cloth_exits_1_with_counts() {
     let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
-        stdout.contains("4 penetrating vertices (deepest 0.100000 m at (0.200, 0.300, 0.900))"),
+        stdout.contains("4 penetrating vertices (deepest 100.00 mm at (0.200, 0.300, 0.900))"),
         "{stdout}"
     );
 }
@@ -134,9 +134,11 @@ fn self_intersecting_cloth_exits_1() {
     assert_eq!(r["frames"][0]["crossing_faces"], serde_json::json!([0, 1]));
     let out = tailor(&[cloth.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        stdout.contains("1 self-intersecting face pairs (first: faces 0 and 1)"),
-        "{stdout}"
+    // Without a body nothing is said to penetrate: the line says it was not checked.
+    assert_eq!(
+        stdout,
+        "1 frame checked: 1 self-intersecting face pairs (first: faces 0 and 1); no body given \
+         (--against), penetration not checked\n"
     );
 }
 
@@ -158,6 +160,23 @@ fn sequences_are_checked_frame_by_frame() {
     assert_eq!(column("frame"), vec![1, 2, 3]);
     assert_eq!(column("penetrating_vertices"), vec![0, 4, 0]);
     assert_eq!(r["total"]["penetrating_vertices"], 4);
+
+    // Standard output names the frames with findings and the summary; --verbose every frame.
+    let lines = |extra: &[&str]| -> Vec<String> {
+        let mut args = vec![cloth.to_str().unwrap(), "--against", body.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let out = tailor(&args);
+        assert_eq!(out.status.code(), Some(1));
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        stdout.lines().map(str::to_owned).collect()
+    };
+    let quiet = lines(&[]);
+    assert_eq!(quiet.len(), 2, "{quiet:?}");
+    assert!(quiet[0].starts_with("frame 2: 4 penetrating vertices (deepest 100.00 mm"));
+    assert!(quiet[1].starts_with("3 frames checked, 1 with findings: 4 penetrating vertices"));
+    let verbose = lines(&["--verbose"]);
+    assert_eq!(verbose.len(), 4, "{verbose:?}");
+    assert!(verbose[0].starts_with("frame 1: 0 penetrating vertices (deepest 0.00 mm)"));
 
     // A missing body frame cannot be checked.
     fs::remove_file(dir.join("body_0003.obj")).unwrap();

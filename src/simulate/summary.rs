@@ -46,6 +46,7 @@ pub fn report(
         .map(|s| s.findings.self_intersecting_pairs)
         .sum();
     let dirty = stats.iter().filter(|s| !s.findings.is_clean()).count();
+    let deepest_mm = deepest * 1e3;
     let frames: Vec<_> = stats
         .iter()
         .map(|s| {
@@ -83,7 +84,7 @@ pub fn report(
         "{}: {} frames simulated in {:.1} s ({mean_ms:.0} ms per frame)\n\
          worst edge strain {:.2}% (frame {})\n\
          tailor check (thickness {thickness} m): {penetrating} penetrating vertices (deepest \
-         {deepest:.4} m), {crossing} self-intersecting face pairs, {dirty} of {} frames not \
+         {deepest_mm:.2} mm), {crossing} self-intersecting face pairs, {dirty} of {} frames not \
          clean\n\
          summary: {}\n",
         scene.display(),
