@@ -148,7 +148,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     };
     let out = args.output.clone().unwrap_or_else(|| PathBuf::from("-"));
     output::write_to(&out, |w| {
-        obj::write(&refined, normals.as_deref(), &mut { w })
+        obj::write(&refined, normals.as_deref(), obj::Precision::Full, &mut {
+            w
+        })
     })?;
     let written = refined.face_count() - refined.holes().len();
     eprintln!(

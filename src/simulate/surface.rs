@@ -161,7 +161,9 @@ impl Surface {
                 .map(|(a, b)| tailor_subdiv::limit::normal(a, b))
                 .collect::<Vec<_>>()
         });
-        write_atomically(path, |w| obj::write(&self.mesh, normals.as_deref(), w))
+        write_atomically(path, |w| {
+            obj::write(&self.mesh, normals.as_deref(), obj::Precision::Full, w)
+        })
     }
 }
 
@@ -183,7 +185,7 @@ pub fn write_with_groups(mesh: &Mesh, groups: &[Group], out: &mut impl Write) ->
     }
     let mut written = (0..mesh.face_count()).filter(|&f| !hole[f]);
     let mut text = Vec::new();
-    obj::write(mesh, None, &mut text)?;
+    obj::write(mesh, None, obj::Precision::Full, &mut text)?;
     let mut current: &[&str] = &[];
     for line in text.split_inclusive(|&b| b == b'\n') {
         if line.starts_with(b"f ")
