@@ -80,6 +80,7 @@
 //! precision, gives back an equal [`Mesh`]. Lines are formatted in parallel over chunks and
 //! written in order: the bytes do not depend on the thread count.
 
+mod chunk;
 mod read;
 mod write;
 
