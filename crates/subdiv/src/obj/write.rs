@@ -108,12 +108,22 @@ fn write_lines(
     count: usize,
     line: impl Fn(usize, &mut Vec<u8>) + Sync,
 ) -> io::Result<()> {
+    write_lines_in(w, count, [CHUNK_LINES, BATCH_CHUNKS], line)
+}
+
+/// As [`write_lines`], with `chunk_lines` lines to a chunk and `batch_chunks` chunks to a batch.
+fn write_lines_in(
+    w: &mut impl Write,
+    count: usize,
+    [chunk_lines, batch_chunks]: [usize; 2],
+    line: impl Fn(usize, &mut Vec<u8>) + Sync,
+) -> io::Result<()> {
     let chunks: Vec<_> = (0..count)
-        .step_by(CHUNK_LINES)
-        .map(|start| start..(start + CHUNK_LINES).min(count))
+        .step_by(chunk_lines)
+        .map(|start| start..(start + chunk_lines).min(count))
         .collect();
     let (mut formatted, mut spare): (Vec<Vec<u8>>, Vec<Vec<u8>>) = (Vec::new(), Vec::new());
-    for batch in chunks.chunks(BATCH_CHUNKS) {
+    for batch in chunks.chunks(batch_chunks) {
         spare.resize_with(batch.len(), Vec::new);
         let mut written = Ok(());
         rayon::in_place_scope(|scope| {
@@ -266,6 +276,39 @@ mod tests {
         let mantissa = text.split('e').next().unwrap_or_default();
         let digits: String = mantissa.chars().filter(char::is_ascii_digit).collect();
         digits.trim_matches('0').len().max(1)
+    }
+
+    /// Lines formatted in chunks and batches of any size, on any number of threads, come out
+    /// in order: the text of formatting them one after another.
+    #[test]
+    fn lines_come_out_in_order_whatever_the_chunks_and_threads() {
+        let line = |i: usize, text: &mut Vec<u8>| {
+            push_numbers(
+                text,
+                b"v",
+                &[i as f64 / 7.0, -(i as f64)],
+                Precision::Single,
+            );
+        };
+        for count in [0, 1, 10, 97] {
+            let mut expected = Vec::new();
+            (0..count).for_each(|i| line(i, &mut expected));
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                for sizes in [[1, 1], [1, 3], [3, 2], [7, 5], [100, 1]] {
+                    let mut out = Vec::new();
+                    pool.install(|| write_lines_in(&mut out, count, sizes, line))
+                        .unwrap();
+                    assert!(
+                        out == expected,
+                        "{count} lines, {threads} threads, {sizes:?}"
+                    );
+                }
+            }
+        }
     }
 
     fn single(x: f64) -> String {
