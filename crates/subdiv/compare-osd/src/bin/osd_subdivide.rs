@@ -11,10 +11,10 @@
 use std::fs::File;
 use std::io::{BufWriter, Write};
 
-use opensubdiv_petite::far::{
-    BoundaryInterpolation, PrimvarRefiner, TopologyDescriptor, TopologyRefiner,
-    TopologyRefinerOptions, UniformRefinementOptions,
-};
+use opensubdiv_petite::far::PrimvarRefiner;
+
+#[path = "../osd.rs"]
+mod osd;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -42,19 +42,7 @@ fn main() {
         }
     }
 
-    let descriptor =
-        TopologyDescriptor::new(positions.len() / 3, &sizes, &corners).expect("valid mesh");
-    let options = TopologyRefinerOptions {
-        boundary_interpolation: Some(BoundaryInterpolation::EdgeOnly),
-        face_varying_linear_interpolation: None,
-        ..TopologyRefinerOptions::default()
-    };
-    let mut refiner = TopologyRefiner::new(descriptor, options).expect("OpenSubdiv topology");
-    refiner.refine_uniform(UniformRefinementOptions {
-        refinement_level: level,
-        order_vertices_from_faces_first: false,
-        full_topology_in_last_level: false,
-    });
+    let refiner = osd::refine(positions.len() / 3, &sizes, &corners, level, false);
     let primvars = PrimvarRefiner::new(&refiner).expect("primvar refiner");
     for l in 1..=level {
         positions = primvars
