@@ -357,3 +357,36 @@ fn a_refinement_larger_than_memory_is_refused_before_it_starts() {
         String::from_utf8_lossy(&small.stderr)
     );
 }
+
+/// What `tailor subdivide` writes by default is read by `tailor info`, `tailor check` and
+/// `tailor subdivide` itself.
+#[test]
+fn the_default_output_is_read_by_info_check_and_subdivide() {
+    let out = scratch("read_back.obj");
+    let written = tailor(
+        &[
+            "subdivide",
+            &shape("catmark_cube_creases1.obj"),
+            "-l",
+            "3",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(written.status.success());
+    let out = out.to_str().unwrap();
+    let info = tailor(&["info", out], None);
+    let report = String::from_utf8_lossy(&info.stdout);
+    assert!(report.contains("faces            384"), "{report}");
+    let check = tailor(&["check", out], None);
+    assert_eq!(
+        check.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&check.stdout)
+    );
+    let again = tailor(&["subdivide", out, "-l", "1"], None);
+    assert!(again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr).contains("384 faces -> 1536 faces"));
+}

@@ -66,10 +66,12 @@
 //! same `f32` (what renderers and OpenSubdiv keep; 7–9 significant digits), with
 //! [`Precision::Full`] the shortest that parses back to the same `f64` bits (up to 17 digits,
 //! about 40% more bytes). The text comes from the `ryu` crate (Adams, "Ryū: fast float-to-string
-//! conversion", PLDI 2018), which proves its output shortest and round-tripping and is three times
-//! as fast as `{}` formatting; integral values lose ryu's trailing `.0`, and magnitudes outside
-//! about 1e-5..1e16 take an exponent (`1e-7`), never hundreds of digits. At full precision this
-//! is the text of Rust's `{}` (or `{:e}` outside that range) byte for byte. Then `f` lines,
+//! conversion", PLDI 2018), whose output is proven shortest and round-tripping and which is
+//! several times as fast as `{}` formatting (the project's `docs/DESIGN.md` says why this crate);
+//! integral values lose ryu's trailing `.0`, and magnitudes outside about 1e-5..1e16 take an
+//! exponent (`1e-7`), never hundreds of digits. At full precision this is the text of Rust's `{}`
+//! (or `{:e}` outside that range) but where the value lies exactly halfway between two shortest
+//! texts, which ryu rounds to even and Rust away from zero. Then `f` lines,
 //! one `t crease 2/1/0 a b s` per sharp edge, one `t corner 1/1/0 v s` per sharp vertex
 //! (sharpness always at full precision), and a tag for each option that differs from
 //! [`Options::default`](crate::Options::default). Hole faces are not written (their vertices
