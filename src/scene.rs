@@ -21,7 +21,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use nalgebra::Vector3;
 use serde::Deserialize;
 use tailor_cloth::{Integrator, Material, Stiffness};
-use tailor_subdiv::obj::{self, ObjDocument};
+use tailor_subdiv::obj::{self, ObjDocument, Precision};
 use tailor_subdiv::{Mesh, Point};
 
 use crate::sequence::Pattern;
@@ -194,6 +194,7 @@ struct OutputSection {
     control_mesh: bool,
     limit_normals: bool,
     body: bool,
+    precision: PrecisionName,
 }
 
 impl Default for OutputSection {
@@ -204,8 +205,17 @@ impl Default for OutputSection {
             control_mesh: true,
             limit_normals: false,
             body: true,
+            precision: PrecisionName::Single,
         }
     }
+}
+
+/// `[output] precision`: the names of [`Precision`]'s choices.
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(rename_all = "kebab-case")]
+enum PrecisionName {
+    Single,
+    Full,
 }
 
 /// Deepest subdivision level accepted for output or body (each level multiplies faces by 4).
@@ -348,6 +358,10 @@ pub struct Output {
     pub limit_normals: bool,
     /// Whether to write the refined body `body_####.obj` beside the cloth.
     pub body: bool,
+    /// Digits of the coordinates written: the shortest text of each as an `f32`, or as the
+    /// `f64` itself. Only the files change: the simulation, the checkpoint and the figures of
+    /// `tailor check`'s test keep every bit of the `f64`s.
+    pub precision: Precision,
 }
 
 /// Reads and validates the scene at `path`, with the body frames of simulation frames
@@ -449,6 +463,10 @@ pub fn load(path: &Path, last_frame: Option<u32>) -> Result<Scene> {
             control_mesh: out.control_mesh,
             limit_normals: out.limit_normals,
             body: out.body,
+            precision: match out.precision {
+                PrecisionName::Single => Precision::Single,
+                PrecisionName::Full => Precision::Full,
+            },
         },
         fingerprint: Fingerprint::new(&table, &files),
     })

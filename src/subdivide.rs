@@ -12,7 +12,8 @@ use std::str::FromStr;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use tailor_subdiv::{BoundaryInterpolation, CreaseMethod, FVarLinear, Mesh, TriangleRule, obj};
+use tailor_subdiv::obj::{self, Precision};
+use tailor_subdiv::{BoundaryInterpolation, CreaseMethod, FVarLinear, Mesh, TriangleRule};
 
 use crate::output;
 
@@ -49,6 +50,10 @@ pub struct Args {
     /// The faces are clockwise (left-handed): reverse them on reading.
     #[arg(long)]
     pub left_handed: bool,
+    /// Digits of the coordinates written: single (the shortest text that reads back as the
+    /// same f32, as renderers keep them) or full (the same f64).
+    #[arg(long, default_value_t = Precision::Single, value_parser = parse::<Precision>)]
+    pub precision: Precision,
 }
 
 fn parse<T: FromStr<Err = tailor_subdiv::options::UnknownOption>>(s: &str) -> Result<T, String> {
@@ -148,7 +153,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     };
     let out = args.output.clone().unwrap_or_else(|| PathBuf::from("-"));
     output::write_to(&out, |w| {
-        obj::write(&refined, normals.as_deref(), &mut { w })
+        obj::write(&refined, normals.as_deref(), args.precision, &mut { w })
     })?;
     let written = refined.face_count() - refined.holes().len();
     eprintln!(

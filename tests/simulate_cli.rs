@@ -1,9 +1,10 @@
 //! `tailor simulate` end to end on a small generated shot: a 5 × 5-quad sheet attached by one
 //! row to the top of a cube, draping over its edge, 10 frames.
 //!
-//! - The output reproduces the committed golden files (`tests/golden/simulate/`) within a
-//!   tolerance; regenerate them only on purpose, with
-//!   `TAILOR_BLESS=1 cargo test --test simulate_cli`, and say why in the commit.
+//! - The output at `[output] precision = "full"` reproduces the committed golden files
+//!   (`tests/golden/simulate/`) within a tolerance; regenerate them only on purpose, with
+//!   `TAILOR_BLESS=1 cargo test --test simulate_cli`, and say why in the commit. The default
+//!   output has every number of the full one rounded to `f32`, and the same summary.
 //! - The bytes do not depend on the thread count.
 //! - A run stopped after a frame, killed midway, or interrupted by Ctrl-C (exit 130, no
 //!   temporary left) and resumed writes the same bytes as one uninterrupted run; a run removes
@@ -193,7 +194,7 @@ fn golden(name: &str, produced: &[u8]) {
 #[test]
 fn short_shot_matches_golden_with_one_and_two_threads() {
     let dir = scratch("golden");
-    let scene = shot(&dir, &[]);
+    let scene = shot(&dir, &[(FULL.0, FULL.1)]);
     let scene = scene.to_str().unwrap();
     let one = dir.join("one");
     let two = dir.join("two");
@@ -242,6 +243,86 @@ fn short_shot_matches_golden_with_one_and_two_threads() {
     assert!(summary["total"]["max_strain"].as_f64().unwrap() < 0.5);
 }
 
+/// The scene edit that writes full precision.
+const FULL: (&str, &str) = ("dir = \"out\"", "dir = \"out\"\nprecision = \"full\"");
+
+/// Every number of `single` reads back as the `f32` nearest the same number of `full`, in at
+/// most 9 significant digits; everything else is the same.
+fn rounds_to_f32(name: &str, single: &[u8], full: &[u8]) {
+    let (single, full) = (
+        String::from_utf8_lossy(single),
+        String::from_utf8_lossy(full),
+    );
+    let (a, b): (Vec<_>, Vec<_>) = (
+        single.split_whitespace().collect(),
+        full.split_whitespace().collect(),
+    );
+    assert_eq!(a.len(), b.len(), "{name}");
+    for (x, y) in a.iter().zip(&b) {
+        match (x.parse::<f32>(), y.parse::<f64>()) {
+            (Ok(x32), Ok(y64)) if x != y => {
+                assert_eq!(x32.to_bits(), (y64 as f32).to_bits(), "{name}: {x} for {y}");
+                let digits: String = x.chars().filter(char::is_ascii_digit).collect();
+                assert!(digits.trim_start_matches('0').len() <= 9, "{name}: {x}");
+            }
+            _ => assert_eq!(x, y, "{name}"),
+        }
+    }
+}
+
+#[test]
+fn default_precision_writes_each_number_as_its_f32() {
+    let dir = scratch("precision");
+    let full = dir.join("full");
+    // The body a little off the grid of binary fractions, so that its refined points take
+    // more digits in full than in single precision, as the cloth's do.
+    let off_grid = |dir: &Path| fs::write(dir.join("cube.obj"), cube(0.1)).unwrap();
+    let scene = shot(&dir, &[(FULL.0, FULL.1)]);
+    off_grid(&dir);
+    run_ok(&[
+        scene.to_str().unwrap(),
+        "--out",
+        full.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let scene = shot(&dir, &[]);
+    off_grid(&dir);
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    let scene = scene.to_str().unwrap();
+    run_ok(&[scene, "--out", one.to_str().unwrap(), "--threads", "1"]);
+    run_ok(&[scene, "--out", two.to_str().unwrap(), "--threads", "2"]);
+    let (single, full_files) = (objs(&one), objs(&full));
+    assert!(
+        single == objs(&two),
+        "--threads 1 and 2 wrote different bytes"
+    );
+    assert_eq!(single.len(), full_files.len());
+    for (name, bytes) in &single {
+        rounds_to_f32(name, bytes, &full_files[name]);
+    }
+    // Each of the three sequences is written at the precision asked.
+    for prefix in ["cloth_0", "cloth_control_", "body_"] {
+        let size = |files: &BTreeMap<String, Vec<u8>>| -> usize {
+            let of_kind = files.iter().filter(|(name, _)| name.starts_with(prefix));
+            of_kind.map(|(_, bytes)| bytes.len()).sum()
+        };
+        assert!(size(&single) < size(&full_files), "{prefix}");
+    }
+    // The simulation and its judgement are the f64s': the same summary, times aside.
+    let figures = |dir: &Path| {
+        let mut s = summary(dir);
+        for frame in s["frames"].as_array_mut().unwrap() {
+            frame.as_object_mut().unwrap().remove("ms");
+        }
+        s["total"]
+            .as_object_mut()
+            .unwrap()
+            .retain(|k, _| !k.contains("ms"));
+        s
+    };
+    assert_eq!(figures(&one), figures(&full));
+}
+
 #[test]
 fn stopped_and_resumed_run_writes_the_same_bytes() {
     let dir = scratch("resume");
@@ -269,6 +350,7 @@ fn stopped_and_resumed_run_writes_the_same_bytes() {
             "\n[output]",
             "[body] subdivision_level",
         ),
+        (FULL.0, FULL.1, "[output] precision"),
     ] {
         shot(&dir, &[(from, to)]);
         let out = tailor(&[scene, "--out", parts_s, "--resume"]);
@@ -521,6 +603,10 @@ fn bad_input_is_refused_before_anything_is_written() {
         (
             &[("mesh = \"cube.obj\"", "mesh = \"nobody.obj\"")],
             &["[body] mesh", "nobody.obj"],
+        ),
+        (
+            &[(FULL.0, "dir = \"out\"\nprecision = \"double\"")],
+            &["scene.toml", "precision", "unknown variant `double`"],
         ),
         (
             &[("pins = []", "pins = [\"collar\"]")],

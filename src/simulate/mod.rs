@@ -480,14 +480,17 @@ impl<'a> Shot<'a> {
             self.control.set_positions(&state.positions)?;
             let groups = &self.scene.cloth.doc.groups;
             write_atomically(&name("cloth_control"), |w| {
-                surface::write_with_groups(&self.control, groups, w)
+                surface::write_with_groups(&self.control, groups, out.precision, w)
             })?;
         }
-        self.cloth.write(&name("cloth"), &state.positions)?;
+        self.cloth
+            .write(&name("cloth"), &state.positions, out.precision)?;
         if out.body
             && let (Some(track), Some(body)) = (&self.body, &self.scene.body)
         {
-            track.surface.write(&name("body"), body.control(frame))?;
+            track
+                .surface
+                .write(&name("body"), body.control(frame), out.precision)?;
         }
         Ok(())
     }

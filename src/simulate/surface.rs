@@ -21,7 +21,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use nalgebra::Vector3;
 use tailor_collide::Hierarchy;
-use tailor_subdiv::obj::{self, Group};
+use tailor_subdiv::obj::{self, Group, Precision};
 use tailor_subdiv::{Evaluator, Mesh, Point, Refiner, StencilTable};
 
 use crate::output::write_atomically;
@@ -145,11 +145,11 @@ impl Surface {
     }
 
     /// Writes the refined mesh (with limit normals of control points `control` when the
-    /// surface was made with normals) atomically to `path`.
+    /// surface was made with normals) atomically to `path`, coordinates at `precision`.
     ///
     /// # Errors
     /// Any I/O error, naming the file.
-    pub fn write(&self, path: &Path, control: &[Point]) -> Result<()> {
+    pub fn write(&self, path: &Path, control: &[Point], precision: Precision) -> Result<()> {
         let normals = self.tangents.as_ref().map(|[t1, t2]| {
             let coords: Vec<Vector3<f64>> = control.iter().map(|p| p.coords).collect();
             let mut a = vec![Vector3::zeros(); t1.len()];
@@ -161,16 +161,23 @@ impl Surface {
                 .map(|(a, b)| tailor_subdiv::limit::normal(a, b))
                 .collect::<Vec<_>>()
         });
-        write_atomically(path, |w| obj::write(&self.mesh, normals.as_deref(), w))
+        write_atomically(path, |w| {
+            obj::write(&self.mesh, normals.as_deref(), precision, w)
+        })
     }
 }
 
-/// Writes a control mesh with its OBJ groups: [`obj::write`]'s output with a `g` line before
-/// each run of faces whose group memberships differ from the previous face's.
+/// Writes a control mesh with its OBJ groups: [`obj::write`]'s output at `precision` with a
+/// `g` line before each run of faces whose group memberships differ from the previous face's.
 ///
 /// # Errors
 /// Any I/O error.
-pub fn write_with_groups(mesh: &Mesh, groups: &[Group], out: &mut impl Write) -> io::Result<()> {
+pub fn write_with_groups(
+    mesh: &Mesh,
+    groups: &[Group],
+    precision: Precision,
+    out: &mut impl Write,
+) -> io::Result<()> {
     let mut names: Vec<Vec<&str>> = vec![Vec::new(); mesh.face_count()];
     for g in groups {
         for &f in &g.faces {
@@ -183,7 +190,7 @@ pub fn write_with_groups(mesh: &Mesh, groups: &[Group], out: &mut impl Write) ->
     }
     let mut written = (0..mesh.face_count()).filter(|&f| !hole[f]);
     let mut text = Vec::new();
-    obj::write(mesh, None, &mut text)?;
+    obj::write(mesh, None, precision, &mut text)?;
     let mut current: &[&str] = &[];
     for line in text.split_inclusive(|&b| b == b'\n') {
         if line.starts_with(b"f ")
@@ -272,7 +279,7 @@ mod tests {
                     g cape attach\nf 1 2 3 4\ng cape\nf 2 5 6 3\n";
         let doc = obj::parse(text, "t.obj").unwrap();
         let mut out = Vec::new();
-        write_with_groups(&doc.mesh, &doc.groups, &mut out).unwrap();
+        write_with_groups(&doc.mesh, &doc.groups, Precision::Single, &mut out).unwrap();
         let back = obj::parse(&String::from_utf8(out).unwrap(), "back.obj").unwrap();
         assert_eq!(back, doc);
     }

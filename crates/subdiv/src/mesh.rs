@@ -12,6 +12,8 @@
 //! sharp), and four of its regression shapes rely on it; [`Validation::allow_degenerate_faces`]
 //! opts in to the same treatment (see [`crate::topology`]).
 
+use std::collections::HashSet;
+
 use nalgebra::{Point3, Vector2};
 
 use crate::options::Options;
@@ -317,7 +319,7 @@ impl Mesh {
     /// [`MeshError::TagVertexOutOfRange`], [`MeshError::BadSharpness`] or
     /// [`MeshError::CreaseNotAnEdge`].
     pub fn with_creases(mut self, creases: Vec<Crease>) -> Result<Self, MeshError> {
-        let edges = self.edge_set();
+        let edges = self.edges_among(&creases);
         for c in &creases {
             check_sharpness("crease", c.sharpness)?;
             for v in c.vertices {
@@ -380,17 +382,36 @@ impl Mesh {
         Ok(())
     }
 
-    /// Every edge as a (smaller, larger) vertex pair.
-    fn edge_set(&self) -> std::collections::HashSet<(u32, u32)> {
-        (0..self.face_count())
-            .flat_map(|f| {
-                let fv = self.face(f);
-                (0..fv.len()).map(move |j| {
-                    let (p, q) = (fv[j], fv[(j + 1) % fv.len()]);
-                    (p.min(q), p.max(q))
-                })
-            })
-            .collect()
+    /// The vertex pairs of `creases` that are edges of a face, as (smaller, larger) pairs. One
+    /// pass over the faces that looks up only the edges whose smaller vertex starts a crease
+    /// pair, so a refined mesh with few creases (or none) costs a scan, not a set of all its
+    /// edges.
+    fn edges_among(&self, creases: &[Crease]) -> HashSet<(u32, u32)> {
+        let pair = |p: u32, q: u32| (p.min(q), p.max(q));
+        let wanted: HashSet<(u32, u32)> = creases
+            .iter()
+            .map(|c| pair(c.vertices[0], c.vertices[1]))
+            .collect();
+        if wanted.is_empty() {
+            return wanted;
+        }
+        let mut starts = vec![false; self.positions.len()];
+        for &(a, _) in &wanted {
+            if let Some(start) = starts.get_mut(a as usize) {
+                *start = true;
+            }
+        }
+        let mut found = HashSet::new();
+        for f in 0..self.face_count() {
+            let fv = self.face(f);
+            for (j, &p) in fv.iter().enumerate() {
+                let edge = pair(p, fv[(j + 1) % fv.len()]);
+                if starts[edge.0 as usize] && wanted.contains(&edge) {
+                    found.insert(edge);
+                }
+            }
+        }
+        found
     }
 
     /// The control points.

@@ -5,9 +5,6 @@
 //! face-varying data), which are also what an artist expects from Maya or RenderMan. Note that
 //! `Sdc::Options()` itself defaults to `VTX_BOUNDARY_NONE` and `FVAR_LINEAR_ALL`; we do not.
 
-use std::fmt;
-use std::str::FromStr;
-
 /// How boundary vertices are interpolated (`Sdc::Options::VtxBoundaryInterpolation`).
 ///
 /// Boundary edges are always infinitely sharp; the modes differ in what happens at the vertices.
@@ -104,18 +101,18 @@ macro_rules! named_option {
             }
         }
 
-        impl fmt::Display for $ty {
-            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        impl ::std::fmt::Display for $ty {
+            fn fmt(&self, f: &mut ::std::fmt::Formatter<'_>) -> ::std::fmt::Result {
                 f.write_str(self.name())
             }
         }
 
-        impl FromStr for $ty {
-            type Err = UnknownOption;
+        impl ::std::str::FromStr for $ty {
+            type Err = $crate::options::UnknownOption;
 
             fn from_str(s: &str) -> Result<Self, Self::Err> {
                 Self::NAMES.iter().find(|(_, n)| *n == s).map(|(v, _)| *v).ok_or_else(|| {
-                    UnknownOption {
+                    $crate::options::UnknownOption {
                         option: $what,
                         given: s.to_owned(),
                         expected: concat!($($name, " "),+).trim_ascii_end(),
@@ -125,6 +122,8 @@ macro_rules! named_option {
         }
     };
 }
+
+pub(crate) use named_option;
 
 named_option!(
     BoundaryInterpolation,

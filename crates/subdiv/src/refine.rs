@@ -131,6 +131,28 @@ impl Refinement {
         child
     }
 
+    /// The child's sharp edges that are neither boundary nor non-manifold, in edge order:
+    /// its vertices and sharpness. Read off `parent` (the level this step refined), so a child
+    /// with faces and tags only need not be completed: edges inside parent faces start smooth,
+    /// half `k` of parent edge `e` joins `e`'s edge point to the vertex point of its end `k`
+    /// (as [`Self::full_child`] numbers them), and lies on the boundary when `e` does.
+    #[must_use]
+    pub fn child_creases(&self, parent: &Level) -> Vec<([u32; 2], f32)> {
+        let corners = parent.face_verts.items.len();
+        let c = &self.child;
+        (corners..c.edge_sharpness.len())
+            .filter(|&i| crease::is_sharp(c.edge_sharpness[i]) && !c.edge_nonmanifold[i])
+            .filter_map(|i| {
+                let (e, k) = ((i - corners) / 2, (i - corners) % 2);
+                let ends = [
+                    self.layout.of_edge(e),
+                    self.layout.of_vertex(parent.edge_verts[e][k] as usize),
+                ];
+                (!parent.is_boundary_edge(e)).then_some((ends, c.edge_sharpness[i]))
+            })
+            .collect()
+    }
+
     /// One row per child vertex, over `parent` (the level this step refined). A column below
     /// the parent's vertex count names a parent vertex; a column `c` at or above it names the
     /// child vertex `c − parent vertex count`, always a face point (vertex and edge points use

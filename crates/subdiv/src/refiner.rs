@@ -194,7 +194,28 @@ impl Refiner {
     /// If `positions` is not the last level's vertex count.
     #[must_use]
     pub fn refined_mesh(&self, positions: Vec<Point>, uvs: Option<FaceVarying>) -> Mesh {
-        let level = self.last();
+        // The last level as built, faces and tags only after `for_evaluation`: enough for the
+        // mesh and its creases; a complete one is built only for corners when boundary
+        // corners are interpolated (which tell topological corners apart).
+        let corner_option = self.options.boundary == BoundaryInterpolation::EdgeAndCorner;
+        let (level, creases) = match self.steps.split_last() {
+            Some((step, _)) if !step.has_full_child() && !corner_option => {
+                let parent = self.parent_level(self.levels() - 1);
+                (&step.child, step.child_creases(parent))
+            }
+            _ => {
+                let level = self.last();
+                let creases = (0..level.edge_count())
+                    .filter(|&e| {
+                        crease::is_sharp(level.edge_sharpness[e])
+                            && !level.is_boundary_edge(e)
+                            && !level.edge_nonmanifold[e]
+                    })
+                    .map(|e| (level.edge_verts[e], level.edge_sharpness[e]))
+                    .collect();
+                (level, creases)
+            }
+        };
         assert_eq!(positions.len(), level.vertex_count);
         // Level 0 may keep the control mesh's degenerate faces; refined levels have none.
         let mut mesh = Mesh::from_flat_with(
@@ -207,25 +228,20 @@ impl Refiner {
         )
         .expect("refined topology is valid");
         mesh.options = self.options;
-        let creases = (0..level.edge_count())
-            .filter(|&e| {
-                crease::is_sharp(level.edge_sharpness[e])
-                    && !level.is_boundary_edge(e)
-                    && !level.edge_nonmanifold[e]
-            })
-            .map(|e| Crease {
-                vertices: level.edge_verts[e],
-                sharpness: f64::from(level.edge_sharpness[e]),
+        let creases = creases
+            .into_iter()
+            .map(|(vertices, sharpness)| Crease {
+                vertices,
+                sharpness: f64::from(sharpness),
             })
             .collect();
-        let corner_option = self.options.boundary == BoundaryInterpolation::EdgeAndCorner;
         let corners = (0..level.vertex_count)
             .filter(|&v| {
                 let topological_corner =
-                    level.vert_faces.range(v).len() == 1 && level.vert_edges.range(v).len() == 2;
+                    || level.vert_faces.range(v).len() == 1 && level.vert_edges.range(v).len() == 2;
                 crease::is_sharp(level.vertex_sharpness[v])
                     && !level.vertex_nonmanifold[v]
-                    && !(corner_option && topological_corner)
+                    && !(corner_option && topological_corner())
             })
             .map(|v| Corner {
                 vertex: crate::mesh::to_u32(v),
@@ -263,7 +279,7 @@ pub struct Limit {
 /// refined vertices when `limit` is set.
 #[must_use]
 pub fn subdivide(mesh: &Mesh, levels: usize, limit: bool) -> (Mesh, Option<Limit>) {
-    let refiner = Refiner::new(mesh, levels);
+    let refiner = Refiner::for_evaluation(mesh, levels);
     let positions = refiner.refine(mesh.positions());
     let uvs = mesh.uvs().and_then(|uvs| refiner.refine_uvs(&uvs.values));
     let limit = limit.then(|| {

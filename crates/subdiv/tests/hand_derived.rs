@@ -4,7 +4,7 @@
 //! refiner (minimal last level) giving exactly what the full one gives.
 
 use nalgebra::Vector3;
-use tailor_subdiv::{Crease, Mesh, Point, Refiner, subdivide};
+use tailor_subdiv::{BoundaryInterpolation, Crease, Mesh, Point, Refiner, subdivide};
 
 fn cube() -> Mesh {
     let p = |x, y, z| Point::new(x, y, z);
@@ -190,6 +190,45 @@ fn evaluation_refiner_gives_the_full_refiners_results() {
             eval.refined_mesh(points, None)
         );
     }
+}
+
+/// The refined mesh `subdivide` writes, read off the minimal last level (creases from the
+/// level above it), is the one the complete last level gives: on every reference shape
+/// (boundaries, creases, corners, holes, non-manifold vertices), with each boundary mode.
+#[test]
+fn refined_meshes_from_the_minimal_last_level_are_the_full_ones() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/opensubdiv/shapes");
+    let validation = tailor_subdiv::Validation {
+        allow_degenerate_faces: true,
+    };
+    let mut creased = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let mut mesh = tailor_subdiv::obj::read_with(&path, validation)
+            .unwrap()
+            .mesh;
+        for boundary in [
+            BoundaryInterpolation::None,
+            BoundaryInterpolation::EdgeOnly,
+            BoundaryInterpolation::EdgeAndCorner,
+        ] {
+            mesh.options.boundary = boundary;
+            for levels in 1..=2 {
+                let (full, eval) = (
+                    Refiner::new(&mesh, levels),
+                    Refiner::for_evaluation(&mesh, levels),
+                );
+                let points = full.refine(mesh.positions());
+                let (a, b) = (
+                    full.refined_mesh(points.clone(), None),
+                    eval.refined_mesh(points, None),
+                );
+                assert_eq!(a, b, "{} at level {levels}, {boundary:?}", path.display());
+                creased += usize::from(!a.creases().is_empty());
+            }
+        }
+    }
+    assert!(creased > 20, "only {creased} refined meshes with creases");
 }
 
 #[test]

@@ -520,3 +520,74 @@ fn truncated_and_garbled_input_errs_without_panicking() {
     let text = TAGGED.replace("v 0.5 0.5 -0.5", "v 0.5 0.5");
     assert_eq!(parse(&text, "x").unwrap_err().line(), Some(7));
 }
+
+/// A grid of `n` × `n` quads as OBJ text: vertex lines, then face lines.
+fn grid_text(n: usize) -> String {
+    let mut text = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            text += &format!("v {} {} 0.{}\n", i, j, (i * 7919 + j) % 1000);
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i + 1;
+            text += &format!("f {a} {} {} {}\n", a + 1, a + n + 2, a + n + 1);
+        }
+    }
+    text
+}
+
+/// A file of megabytes is parsed in parallel chunks; an error far into it, in a chunk
+/// parsed before the ones ahead of it were joined, still names its own line, and the first
+/// of two errors is the one reported.
+#[test]
+fn errors_far_into_a_large_file_name_their_line() {
+    let n = 300;
+    let text = grid_text(n);
+    assert!(text.len() > 2 << 20, "{} bytes: too few chunks", text.len());
+    let lines: Vec<&str> = text.lines().collect();
+    let vertices = (n + 1) * (n + 1);
+    let doc = parse(&text, "test.obj").unwrap();
+    assert_eq!(doc.mesh.face_count(), n * n);
+    let z: f64 = format!("0.{}", (n * 7919 + n) % 1000).parse().unwrap();
+    assert_eq!(doc.mesh.positions()[vertices - 1].z, z);
+
+    let with = |edits: &[(usize, &str)]| {
+        let mut lines = lines.clone();
+        for &(k, line) in edits {
+            lines[k] = line;
+        }
+        lines.join("\n") + "\n"
+    };
+    let last = lines.len() - 1;
+    let out_of_range = format!("f 1 2 {} 3", vertices + 1);
+    assert_eq!(
+        at(&with(&[(last, &out_of_range)])),
+        (
+            last + 1,
+            Problem::IndexOutOfRange {
+                kind: "vertex",
+                index: i64::try_from(vertices + 1).unwrap(),
+                count: vertices,
+            }
+        )
+    );
+    let bad_number = Problem::MalformedNumber {
+        token: "x".to_owned(),
+    };
+    assert_eq!(
+        at(&with(&[(last - 5, "v 1 x 0")])),
+        (last - 4, bad_number.clone())
+    );
+    // Two errors: the earlier line's wins, whichever chunk finds its own first.
+    let early = vertices + 10;
+    assert_eq!(
+        at(&with(&[(early, "f 1 2 0"), (last, "v 1 x 0")])),
+        (early + 1, Problem::IndexZero { kind: "vertex" })
+    );
+    assert_eq!(
+        at(&with(&[(early, "v 1 x 0"), (last, &out_of_range)])).0,
+        early + 1
+    );
+}

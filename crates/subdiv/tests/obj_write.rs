@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use nalgebra::Vector3;
-use tailor_subdiv::obj::{parse, read, write};
+use tailor_subdiv::obj::{Precision, parse, read, write};
 use tailor_subdiv::{
     BoundaryInterpolation, Corner, Crease, CreaseMethod, FVarLinear, FaceVarying, Mesh, Options,
     Point, TriangleRule, Uv,
@@ -12,7 +12,7 @@ use tailor_subdiv::{
 
 fn to_text(mesh: &Mesh, normals: Option<&[Vector3<f64>]>) -> String {
     let mut out = Vec::new();
-    write(mesh, normals, &mut out).unwrap();
+    write(mesh, normals, Precision::Full, &mut out).unwrap();
     String::from_utf8(out).unwrap()
 }
 
@@ -151,7 +151,7 @@ fn normals_are_written_per_vertex() {
     assert_eq!(parse(&text, "n").unwrap().mesh, textured);
     assert!(to_text(&textured, None).contains("f 1/1 2/2 5/3 4/4\n"));
 
-    let err = write(&mesh, Some(&normals[..5]), &mut Vec::new()).unwrap_err();
+    let err = write(&mesh, Some(&normals[..5]), Precision::Full, &mut Vec::new()).unwrap_err();
     assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
 }
 

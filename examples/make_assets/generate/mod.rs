@@ -155,7 +155,8 @@ fn body_obj(mesh: &mut Mesh, positions: &[P], header: &str) -> String {
     let rounded: Vec<P> = positions.iter().map(|p| p.map(round6)).collect();
     mesh.set_positions(&rounded).expect("same vertex count");
     let mut out = format!("# {header}, made by examples/make_assets\n").into_bytes();
-    tailor_subdiv::obj::write(mesh, None, &mut out).expect("write to memory");
+    tailor_subdiv::obj::write(mesh, None, tailor_subdiv::obj::Precision::Full, &mut out)
+        .expect("write to memory");
     String::from_utf8(out).expect("OBJ is ASCII")
 }
 

@@ -20,14 +20,14 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 use opensubdiv_petite::far::{
-    self, BoundaryInterpolation, PrimvarRefiner, StencilTable as OsdStencils, StencilTableOptions,
-    TopologyDescriptor, TopologyRefiner as OsdRefiner, TopologyRefinerOptions,
-    UniformRefinementOptions,
+    self, PrimvarRefiner, StencilTable as OsdStencils, StencilTableOptions,
+    TopologyRefiner as OsdRefiner,
 };
 use tailor_subdiv::{Mesh, Point, Refiner};
 
 #[path = "../../benches/common/mod.rs"]
 mod common;
+mod osd;
 
 /// Refinement level of every case.
 const LEVEL: usize = 2;
@@ -60,20 +60,13 @@ impl OsdMesh {
 
     /// Topology refined uniformly to [`LEVEL`] with our options (edge-only boundaries).
     fn refine(&self, full_topology_in_last_level: bool) -> OsdRefiner {
-        let descriptor =
-            TopologyDescriptor::new(self.vertices, &self.sizes, &self.corners).expect("valid");
-        let options = TopologyRefinerOptions {
-            boundary_interpolation: Some(BoundaryInterpolation::EdgeOnly),
-            face_varying_linear_interpolation: None,
-            ..TopologyRefinerOptions::default()
-        };
-        let mut refiner = OsdRefiner::new(descriptor, options).expect("OpenSubdiv topology");
-        refiner.refine_uniform(UniformRefinementOptions {
-            refinement_level: LEVEL,
-            order_vertices_from_faces_first: false,
+        osd::refine(
+            self.vertices,
+            &self.sizes,
+            &self.corners,
+            LEVEL,
             full_topology_in_last_level,
-        });
-        refiner
+        )
     }
 
     /// Positions of the last level, level by level (`Far::PrimvarRefiner::Interpolate`).

@@ -61,17 +61,28 @@
 //! harness does). The reader passes faces through unchanged.
 //!
 //! # Writing
-//! [`write()`] prints every `f64` in a shortest form that parses back to the same bits (Rust's
-//! `{}`, or `{:e}` for magnitudes outside 1e-5..1e16, where `{}` would print hundreds of
-//! digits), then `vt` when the mesh has UVs, `vn` when normals are given, `f` lines, one
-//! `t crease 2/1/0 a b s` per sharp edge, one `t corner 1/1/0 v s` per sharp vertex, and a tag
-//! for each option that differs from [`Options::default`](crate::Options::default). Hole faces
-//! are not written (their vertices are), following the reference data's output convention, and
-//! neither are creases on edges that only hole faces have, nor tags of sharpness 0 that reset
-//! nothing written before them (refinement leaves many decayed creases at 0). Other tags are
-//! written as tagged, in order, so reading the output of a mesh without holes or such no-op tags
-//! gives back an equal [`Mesh`].
+//! [`write()`] prints positions, then `vt` when the mesh has UVs, `vn` when normals are given, at
+//! a [`Precision`]: by default each coordinate is the shortest text that parses back to the
+//! same `f32` (what renderers and OpenSubdiv keep; 7–9 significant digits), with
+//! [`Precision::Full`] the shortest that parses back to the same `f64` bits (up to 17 digits,
+//! about 40% more bytes). The text comes from the `ryu` crate (Adams, "Ryū: fast float-to-string
+//! conversion", PLDI 2018), whose output is proven shortest and round-tripping and which is
+//! several times as fast as `{}` formatting (the project's `docs/DESIGN.md` says why this crate);
+//! integral values lose ryu's trailing `.0`, and magnitudes outside about 1e-5..1e16 take an
+//! exponent (`1e-7`), never hundreds of digits. At full precision this is the text of Rust's `{}`
+//! (or `{:e}` outside that range) but where the value lies exactly halfway between two shortest
+//! texts, which ryu rounds to even and Rust away from zero. Then `f` lines,
+//! one `t crease 2/1/0 a b s` per sharp edge, one `t corner 1/1/0 v s` per sharp vertex
+//! (sharpness always at full precision), and a tag for each option that differs from
+//! [`Options::default`](crate::Options::default). Hole faces are not written (their vertices
+//! are), following the reference data's output convention, and neither are creases on edges
+//! that only hole faces have, nor tags of sharpness 0 that reset nothing written before them
+//! (refinement leaves many decayed creases at 0). Other tags are written as tagged, in order,
+//! so reading the output of a mesh without holes or such no-op tags, written at full
+//! precision, gives back an equal [`Mesh`]. Lines are formatted in parallel over chunks and
+//! written in order: the bytes do not depend on the thread count.
 
+mod chunk;
 mod read;
 mod write;
 
@@ -79,7 +90,24 @@ pub use read::{parse, parse_with, read, read_with};
 pub use write::write;
 
 use crate::mesh::{Mesh, MeshError};
-use crate::options::{BoundaryInterpolation, CreaseMethod, FVarLinear, TriangleRule};
+use crate::options::{BoundaryInterpolation, CreaseMethod, FVarLinear, TriangleRule, named_option};
+
+/// How many digits [`write()`] gives positions, UVs and normals.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Precision {
+    /// The shortest text that parses back to the value rounded to `f32` (a value beyond
+    /// `f32`'s range is written in full rather than as infinity).
+    #[default]
+    Single,
+    /// The shortest text that parses back to the same `f64`.
+    Full,
+}
+
+named_option!(
+    Precision,
+    "precision",
+    [(Precision::Single, "single"), (Precision::Full, "full")]
+);
 
 /// A control mesh read from OBJ, with the file's groups.
 #[derive(Clone, Debug, PartialEq)]

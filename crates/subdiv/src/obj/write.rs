@@ -1,16 +1,32 @@
-//! The OBJ writer: exact `f64`s, UVs, normals, faces without holes, tags and non-default options.
+//! The OBJ writer: coordinates as the shortest text that reads back as the same `f32` (or, at
+//! [`Precision::Full`], `f64`), UVs, normals, faces without holes, tags and non-default options.
+//!
+//! Lines are formatted in parallel, a chunk of [`CHUNK_LINES`] lines per task, and written in
+//! file order, so the bytes do not depend on the thread count; at most two batches of
+//! [`BATCH_CHUNKS`] chunks are held as text at once, one being written while the next is
+//! formatted.
 
 use std::collections::HashSet;
 use std::fmt;
 use std::io::{self, BufWriter, Write};
 
 use nalgebra::Vector3;
+use rayon::prelude::*;
 
-use super::{BOUNDARY_CODES, CREASE_METHOD_NAMES, FVAR_CODES, TRIANGLE_RULE_NAMES};
+use super::{BOUNDARY_CODES, CREASE_METHOD_NAMES, FVAR_CODES, Precision, TRIANGLE_RULE_NAMES};
 use crate::mesh::Mesh;
 use crate::options::Options;
 
-/// Writes `mesh` as OBJ with OpenSubdiv tags, with one normal per vertex if `normals` is given.
+/// Lines formatted by one task: enough that a task outweighs its scheduling (a 1.6 M-face
+/// mesh makes about 200 tasks), few enough that two threads finish close together.
+const CHUNK_LINES: usize = 16_384;
+
+/// Chunks formatted before they are written: bounds the text held at once to about 60 MB
+/// (two batches of 64 chunks of 16k lines of about 30 bytes), whatever the mesh's size.
+const BATCH_CHUNKS: usize = 64;
+
+/// Writes `mesh` as OBJ with OpenSubdiv tags, with one normal per vertex if `normals` is given,
+/// positions, UVs and normals at `precision` (tags always at full precision).
 ///
 /// Output is buffered internally. Hole faces are left out (their vertices are written), and so
 /// are tags without effect; see the [module documentation](super) for the exact format.
@@ -21,6 +37,7 @@ use crate::options::Options;
 pub fn write(
     mesh: &Mesh,
     normals: Option<&[Vector3<f64>]>,
+    precision: Precision,
     out: &mut impl Write,
 ) -> io::Result<()> {
     if let Some(n) = normals
@@ -32,38 +49,126 @@ pub fn write(
         ));
     }
     let mut w = BufWriter::new(out);
-    for p in mesh.positions() {
-        writeln!(w, "v {} {} {}", Num(p.x), Num(p.y), Num(p.z))?;
-    }
+    let positions = mesh.positions();
+    write_lines(&mut w, positions.len(), |v, line| {
+        let p = positions[v];
+        push_numbers(line, b"v", &[p.x, p.y, p.z], precision);
+    })?;
     let uvs = mesh.uvs();
-    for uv in uvs.iter().flat_map(|uvs| &uvs.values) {
-        writeln!(w, "vt {} {}", Num(uv.x), Num(uv.y))?;
-    }
-    for n in normals.unwrap_or_default() {
-        writeln!(w, "vn {} {} {}", Num(n.x), Num(n.y), Num(n.z))?;
-    }
+    let uv_values = uvs.map_or(&[][..], |uvs| &uvs.values);
+    write_lines(&mut w, uv_values.len(), |k, line| {
+        let uv = uv_values[k];
+        push_numbers(line, b"vt", &[uv.x, uv.y], precision);
+    })?;
+    let normal_values = normals.unwrap_or_default();
+    write_lines(&mut w, normal_values.len(), |v, line| {
+        let n = normal_values[v];
+        push_numbers(line, b"vn", &[n.x, n.y, n.z], precision);
+    })?;
 
     let mut hole = vec![false; mesh.face_count()];
     for &f in mesh.holes() {
         hole[f as usize] = true;
     }
-    for f in (0..mesh.face_count()).filter(|&f| !hole[f]) {
-        w.write_all(b"f")?;
+    let (face_vertices, with_normals) = (mesh.face_vertices(), normals.is_some());
+    write_lines(&mut w, mesh.face_count(), |f, line| {
+        if hole[f] {
+            return;
+        }
+        let mut integer = itoa::Buffer::new();
+        let mut push = |line: &mut Vec<u8>, index: u32| {
+            line.extend_from_slice(integer.format(u64::from(index) + 1).as_bytes());
+        };
+        line.push(b'f');
         for c in mesh.face_range(f) {
-            let v = u64::from(mesh.face_vertices()[c]) + 1;
-            write!(w, " {v}")?;
-            match (uvs, normals.is_some()) {
-                (Some(uvs), true) => write!(w, "/{}/{v}", u64::from(uvs.indices[c]) + 1)?,
-                (Some(uvs), false) => write!(w, "/{}", u64::from(uvs.indices[c]) + 1)?,
-                (None, true) => write!(w, "//{v}")?,
-                (None, false) => {}
+            let v = face_vertices[c];
+            line.push(b' ');
+            push(line, v);
+            if let Some(uvs) = uvs {
+                line.push(b'/');
+                push(line, uvs.indices[c]);
+            }
+            if with_normals {
+                line.extend_from_slice(if uvs.is_some() { b"/" } else { b"//" });
+                push(line, v);
             }
         }
-        w.write_all(b"\n")?;
-    }
+        line.push(b'\n');
+    })?;
 
     write_tags(mesh, &hole, &mut w)?;
     w.flush()
+}
+
+/// Writes `count` lines, line `i` appended to its chunk's text by `line(i, text)`: a batch of
+/// chunks is formatted in parallel while this thread writes the batch before it, in order.
+/// The two batches' buffers are reused, so a large mesh does not map fresh memory for each.
+fn write_lines(
+    w: &mut impl Write,
+    count: usize,
+    line: impl Fn(usize, &mut Vec<u8>) + Sync,
+) -> io::Result<()> {
+    write_lines_in(w, count, [CHUNK_LINES, BATCH_CHUNKS], line)
+}
+
+/// As [`write_lines`], with `chunk_lines` lines to a chunk and `batch_chunks` chunks to a batch.
+fn write_lines_in(
+    w: &mut impl Write,
+    count: usize,
+    [chunk_lines, batch_chunks]: [usize; 2],
+    line: impl Fn(usize, &mut Vec<u8>) + Sync,
+) -> io::Result<()> {
+    let chunks: Vec<_> = (0..count)
+        .step_by(chunk_lines)
+        .map(|start| start..(start + chunk_lines).min(count))
+        .collect();
+    let (mut formatted, mut spare): (Vec<Vec<u8>>, Vec<Vec<u8>>) = (Vec::new(), Vec::new());
+    for batch in chunks.chunks(batch_chunks) {
+        spare.resize_with(batch.len(), Vec::new);
+        let mut written = Ok(());
+        rayon::in_place_scope(|scope| {
+            let (spare, line) = (&mut spare, &line);
+            scope.spawn(move |_| {
+                batch.par_iter().zip(spare).for_each(|(lines, text)| {
+                    text.clear();
+                    for i in lines.clone() {
+                        line(i, text);
+                    }
+                });
+            });
+            written = formatted.iter().try_for_each(|text| w.write_all(text));
+        });
+        written?;
+        std::mem::swap(&mut formatted, &mut spare);
+    }
+    formatted.iter().try_for_each(|text| w.write_all(text))
+}
+
+/// Appends `keyword`, each value after a space at `precision`, and a line end.
+fn push_numbers(line: &mut Vec<u8>, keyword: &[u8], values: &[f64], precision: Precision) {
+    let mut buffer = ryu::Buffer::new();
+    line.extend_from_slice(keyword);
+    for &x in values {
+        line.push(b' ');
+        line.extend_from_slice(shortest(x, precision, &mut buffer).as_bytes());
+    }
+    line.push(b'\n');
+}
+
+/// The shortest text that parses back to `x` at `precision` (`x as f32` at
+/// [`Precision::Single`], unless that overflows to infinity: such a value is written in full).
+///
+/// ryu prints integral values with a trailing `.0` (`1.0`, `-0.0`), which is left out as
+/// Rust's `Display` does; magnitudes outside its decimal range (1e-5..1e16 for `f64`,
+/// 1e-6..1e13 for `f32`) are written with an exponent (`1e-7`, `2.5e20`), never as hundreds of
+/// digits.
+pub(super) fn shortest(x: f64, precision: Precision, buffer: &mut ryu::Buffer) -> &str {
+    let single = x as f32;
+    let text = match precision {
+        Precision::Single if !(x.is_finite() && single.is_infinite()) => buffer.format(single),
+        _ => buffer.format(x),
+    };
+    text.strip_suffix(".0").unwrap_or(text)
 }
 
 /// Creases and corners as tagged, minus those without effect, then the options that differ from the default.
@@ -142,17 +247,196 @@ fn write_code<T: PartialEq, K: fmt::Display>(
     }
 }
 
-/// An `f64` printed so that it parses back to the same value: Rust's shortest round-trip digits,
-/// in exponent form outside 1e-5..1e16 where plain `{}` would print hundreds of digits.
+/// An `f64` printed in full: the shortest text that parses back to the same bits.
 struct Num(f64);
 
 impl fmt::Display for Num {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let a = self.0.abs();
-        if a == 0.0 || !a.is_finite() || (1e-5..1e16).contains(&a) {
-            write!(f, "{}", self.0)
+        f.write_str(shortest(self.0, Precision::Full, &mut ryu::Buffer::new()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Bit patterns from a fixed-seed generator (Knuth's MMIX LCG), the high bits first.
+    fn bits(n: usize) -> impl Iterator<Item = u64> {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        (0..n).map(move |_| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            state
+        })
+    }
+
+    /// Significant digits of a number's text.
+    fn digits(text: &str) -> usize {
+        let mantissa = text.split('e').next().unwrap_or_default();
+        let digits: String = mantissa.chars().filter(char::is_ascii_digit).collect();
+        digits.trim_matches('0').len().max(1)
+    }
+
+    /// Lines formatted in chunks and batches of any size, on any number of threads, come out
+    /// in order: the text of formatting them one after another.
+    #[test]
+    fn lines_come_out_in_order_whatever_the_chunks_and_threads() {
+        let line = |i: usize, text: &mut Vec<u8>| {
+            push_numbers(
+                text,
+                b"v",
+                &[i as f64 / 7.0, -(i as f64)],
+                Precision::Single,
+            );
+        };
+        for count in [0, 1, 10, 97] {
+            let mut expected = Vec::new();
+            (0..count).for_each(|i| line(i, &mut expected));
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                for sizes in [[1, 1], [1, 3], [3, 2], [7, 5], [100, 1]] {
+                    let mut out = Vec::new();
+                    pool.install(|| write_lines_in(&mut out, count, sizes, line))
+                        .unwrap();
+                    assert!(
+                        out == expected,
+                        "{count} lines, {threads} threads, {sizes:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    fn single(x: f64) -> String {
+        shortest(x, Precision::Single, &mut ryu::Buffer::new()).to_owned()
+    }
+
+    fn full(x: f64) -> String {
+        shortest(x, Precision::Full, &mut ryu::Buffer::new()).to_owned()
+    }
+
+    #[test]
+    fn single_precision_text_reads_back_as_the_same_f32() {
+        let edges = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.1,
+            1.0 / 3.0,
+            f32::MAX,
+            f32::MIN,
+            f32::MIN_POSITIVE,
+            f32::from_bits(1),
+            f32::EPSILON,
+            1e-6,
+            1e-6_f32.next_down(),
+            1e13,
+            1e13_f32.next_down(),
+            16_777_217.0,
+        ];
+        let random = bits(200_000).map(|b| f32::from_bits((b >> 32) as u32));
+        let unit = bits(200_000).map(|b| ((b >> 40) as f32) / (1u32 << 24) as f32 * 2.0 - 1.0);
+        for x in edges.into_iter().chain(random).chain(unit) {
+            if !x.is_finite() {
+                continue;
+            }
+            let text = single(f64::from(x));
+            let back: f32 = text.parse().unwrap();
+            assert_eq!(back.to_bits(), x.to_bits(), "{x:e} wrote {text}");
+            // Through an f64 reader (tailor's, tobj's) and rounded, the same bits too.
+            let wide: f64 = text.parse().unwrap();
+            assert_eq!((wide as f32).to_bits(), x.to_bits(), "{x:e} wrote {text}");
+            // As few significant digits as Rust's own shortest round-trip text.
+            assert_eq!(
+                digits(&text),
+                digits(&format!("{x:e}")),
+                "{x:e} wrote {text}"
+            );
+            assert!(text.len() <= 16, "{x:e} wrote {text}");
+        }
+        assert_eq!(single(0.1 + 0.2), "0.3");
+        assert_eq!(single(-0.0), "-0");
+        assert_eq!(single(2.0), "2");
+        assert_eq!(single(1e-7), "1e-7");
+        assert_eq!(single(0.123_456_789_012), "0.12345679");
+    }
+
+    #[test]
+    fn single_precision_keeps_what_f32_cannot_hold() {
+        for x in [1e39, -3e300, f64::MAX] {
+            assert_eq!(single(x).parse::<f64>().unwrap(), x);
+        }
+        // Below f32's range a value rounds to zero, as an f32 reader would make it.
+        assert_eq!(single(1e-300), "0");
+    }
+
+    /// The text of `{}`, or `{:e}` outside 1e-5..1e16 (where `{}` writes hundreds of digits).
+    fn display(x: f64) -> String {
+        let a = x.abs();
+        if a == 0.0 || (1e-5..1e16).contains(&a) {
+            format!("{x}")
         } else {
-            write!(f, "{:e}", self.0)
+            format!("{x:e}")
+        }
+    }
+
+    /// Full precision writes the text of `{}` (`{:e}` outside 1e-5..1e16), but for a value
+    /// exactly halfway between two shortest texts (a tie, such as ...781.25 at 1.7e15 where
+    /// the spacing of `f64`s is 0.25), where ryu rounds the last digit to even and Rust away
+    /// from zero: both read back as the value.
+    /// Whether decimal texts `a` and `b` of `x`, as long as each other and different only in
+    /// their last digit, are the two roundings of an exact value that ends in 5 just after it.
+    fn is_tie(x: f64, a: &str, b: &str) -> bool {
+        let Some((_, fraction)) = a.split_once('.') else {
+            return false;
+        };
+        let decimals = fraction.len();
+        let exact = format!("{x:.*}", decimals + 40);
+        let after = &exact[exact.len() - 40..];
+        let differ = a.bytes().zip(b.bytes()).filter(|(p, q)| p != q).count();
+        a.len() == b.len()
+            && differ == 1
+            && a.as_bytes()[a.len() - 1] != b.as_bytes()[b.len() - 1]
+            && after.starts_with('5')
+            && after[1..].bytes().all(|d| d == b'0')
+    }
+
+    #[test]
+    fn full_precision_is_rust_display_but_for_ties() {
+        let edges = [
+            0.0,
+            -0.0,
+            1.0,
+            0.1 + 0.2,
+            1e-5,
+            1e-5_f64.next_down(),
+            1e16,
+            1e16_f64.next_down(),
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            5e-324,
+            123_456_789.0,
+        ];
+        let random = bits(200_000).map(f64::from_bits);
+        let unit = bits(200_000).map(|b| (b >> 11) as f64 / (1u64 << 53) as f64 * 200.0 - 100.0);
+        for x in edges.into_iter().chain(random).chain(unit) {
+            if x.is_finite() {
+                let (text, rust) = (full(x), display(x));
+                assert_eq!(
+                    text.parse::<f64>().unwrap().to_bits(),
+                    x.to_bits(),
+                    "{rust}"
+                );
+                assert!(
+                    text == rust || is_tie(x, &text, &rust),
+                    "{text} against {rust}"
+                );
+            }
         }
     }
 }
