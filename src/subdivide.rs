@@ -13,7 +13,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use tailor_subdiv::obj::{self, Precision};
-use tailor_subdiv::{BoundaryInterpolation, CreaseMethod, FVarLinear, Mesh, TriangleRule};
+use tailor_subdiv::{
+    BoundaryInterpolation, CreaseMethod, FVarLinear, Mesh, MeshError, TriangleRule, Validation,
+};
 
 use crate::output;
 
@@ -95,14 +97,52 @@ fn available_memory() -> Option<u64> {
 
 /// Reads a control mesh from a file, or standard input for `-`.
 pub fn read_mesh(path: &Path) -> Result<obj::ObjDocument> {
-    if path.as_os_str() == "-" {
+    let (text, source) = if path.as_os_str() == "-" {
         let mut text = String::new();
         std::io::stdin()
             .read_to_string(&mut text)
             .context("reading standard input")?;
-        Ok(obj::parse(&text, "<stdin>")?)
+        (text, "<stdin>".to_owned())
     } else {
-        Ok(obj::read(path)?)
+        let source = path.display().to_string();
+        match std::fs::read(path) {
+            Ok(bytes) => (String::from_utf8_lossy(&bytes).into_owned(), source),
+            Err(error) => {
+                return Err(obj::ObjError::Io {
+                    file: source,
+                    error,
+                }
+                .into());
+            }
+        }
+    };
+    match obj::parse(&text, &source) {
+        Err(
+            first @ obj::ObjError::At {
+                problem: obj::Problem::Mesh(MeshError::RepeatedVertex { .. }),
+                ..
+            },
+        ) => {
+            // OpenSubdiv reads a face that repeats a vertex: its repeated corners make a
+            // degenerate edge, non-manifold and so infinitely sharp (four of its regression
+            // shapes have such faces). So does the tool, saying where the first one is.
+            let validation = Validation {
+                allow_degenerate_faces: true,
+            };
+            let doc = obj::parse_with(&text, &source, validation)?;
+            let degenerate = (0..doc.mesh.face_count())
+                .filter(|&f| {
+                    let face = doc.mesh.face(f);
+                    face.iter().enumerate().any(|(i, v)| face[..i].contains(v))
+                })
+                .count();
+            eprintln!(
+                "warning: {first}: read as OpenSubdiv reads it, the repeated corners making a \
+                 degenerate, infinitely sharp edge ({degenerate} such face(s) in all)"
+            );
+            Ok(doc)
+        }
+        read => Ok(read?),
     }
 }
 

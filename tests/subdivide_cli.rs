@@ -309,6 +309,34 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
 }
 
 #[test]
+fn faces_that_repeat_a_vertex_are_read_as_opensubdiv_reads_them_with_a_warning() {
+    // catmark_nonman_quadpole8: face 1, `f 4 3 5 5` on line 19, and seven more like it.
+    let out = scratch("quadpole8.obj");
+    let o = tailor(
+        &[
+            "subdivide",
+            &shape("catmark_nonman_quadpole8.obj"),
+            "-l",
+            "1",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert_eq!(o.status.code(), Some(0));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("catmark_nonman_quadpole8.obj:19: face 1 uses vertex 4 more than once")
+            && err.contains("(8 such face(s) in all)"),
+        "{err}"
+    );
+    // What OpenSubdiv makes of it is `tests/opensubdiv_cli.rs`'s; here, a mesh was written.
+    assert!(fs::read_to_string(&out).unwrap().contains("\nf "));
+    let o = tailor(&["info", &shape("catmark_nonman_quadpole8.obj")], None);
+    assert_eq!(o.status.code(), Some(0));
+}
+
+#[test]
 fn failed_run_keeps_the_previous_output() {
     let out = scratch("kept.obj");
     fs::write(&out, "previous").unwrap();

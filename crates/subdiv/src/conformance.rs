@@ -247,10 +247,9 @@ pub fn check_limit(shape: &Mesh, reference: &Reference) -> Result<(), String> {
     Ok(())
 }
 
-/// Runs every comparison the reference folder supports and returns one outcome per file.
+/// The reference files of `dir` (`refined/`, `limit/` and `facevarying/`), sorted.
 #[must_use]
-pub fn run(dir: &Path) -> Vec<Outcome> {
-    let mut outcomes = Vec::new();
+pub fn reference_files(dir: &Path) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = ["refined", "limit", "facevarying"]
         .iter()
         .filter_map(|sub| fs::read_dir(dir.join(sub)).ok())
@@ -259,16 +258,113 @@ pub fn run(dir: &Path) -> Vec<Outcome> {
         .filter(|p| p.extension().is_some_and(|e| e == "obj"))
         .collect();
     files.sort();
-    for file in files {
-        let name = file
-            .strip_prefix(dir)
-            .unwrap_or(&file)
-            .display()
-            .to_string();
-        let failure = check_file(dir, &file).err();
-        outcomes.push(Outcome { name, failure });
+    files
+}
+
+/// Runs every comparison the reference folder supports and returns one outcome per file.
+#[must_use]
+pub fn run(dir: &Path) -> Vec<Outcome> {
+    reference_files(dir)
+        .into_iter()
+        .map(|file| {
+            let name = file
+                .strip_prefix(dir)
+                .unwrap_or(&file)
+                .display()
+                .to_string();
+            let failure = check_file(dir, &file).err();
+            Outcome { name, failure }
+        })
+        .collect()
+}
+
+/// What a reference file holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Uniformly refined control points and faces (`refined/`).
+    Refined,
+    /// Limit positions and normals of the level-1 points (`limit/`).
+    Limit,
+    /// Refined points with UVs under one face-varying mode (`facevarying/`).
+    FaceVarying,
+}
+
+/// How OpenSubdiv made a reference file: from which shape, at which level, with which options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Case {
+    /// The control mesh, in `shapes/`.
+    pub shape: PathBuf,
+    /// What the file holds.
+    pub kind: Kind,
+    /// The refinement level.
+    pub level: usize,
+    /// The face-varying mode, for [`Kind::FaceVarying`].
+    pub fvar_linear: Option<FVarLinear>,
+    /// The shape's faces are clockwise (`catmark_lefthanded`).
+    pub left_handed: bool,
+}
+
+/// The case of reference file `file` in folder `dir`, from its folder and name.
+///
+/// # Errors
+/// A file name that names no level, or a face-varying file that names no mode.
+pub fn case(dir: &Path, file: &Path) -> Result<Case, String> {
+    let kind = match file
+        .parent()
+        .and_then(Path::file_name)
+        .and_then(|k| k.to_str())
+    {
+        Some("refined") => Kind::Refined,
+        Some("limit") => Kind::Limit,
+        _ => Kind::FaceVarying,
+    };
+    let stem = file.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+    let (shape_name, mode, level) = split_name(stem).ok_or("unrecognised file name")?;
+    let (shape_name, fvar_linear) = if kind == Kind::FaceVarying {
+        let mode = mode.ok_or("no face-varying mode in the file name")?;
+        (shape_name, Some(mode))
+    } else {
+        (stem.rsplit_once("_L").map_or(stem, |s| s.0), None)
+    };
+    Ok(Case {
+        shape: dir.join("shapes").join(format!("{shape_name}.obj")),
+        kind,
+        level,
+        fvar_linear,
+        left_handed: shape_name == "catmark_lefthanded",
+    })
+}
+
+/// Compares an OBJ another program wrote for `case` (read with [`read_reference`]) with
+/// OpenSubdiv's `reference`: positions, normals and UVs coordinate by coordinate (limit UVs
+/// within [`SINGLE_TOLERANCE`]), faces and their UV indices exactly.
+///
+/// # Errors
+/// The first mismatch, described.
+pub fn check_written(
+    case: &Case,
+    written: &Reference,
+    reference: &Reference,
+) -> Result<(), String> {
+    compare("vertices", &written.positions, &reference.positions)?;
+    if !reference.normals.is_empty() {
+        compare("normals", &written.normals, &reference.normals)?;
     }
-    outcomes
+    if case.kind != Kind::Limit && written.faces != reference.faces {
+        return Err("faces differ".into());
+    }
+    if !reference.uvs.is_empty() {
+        let tolerance = if case.kind == Kind::Limit {
+            SINGLE_TOLERANCE
+        } else {
+            TOLERANCE
+        };
+        compare_within("uvs", &written.uvs, &reference.uvs, tolerance)?;
+        if case.kind != Kind::Limit && written.face_uvs != reference.face_uvs {
+            return Err("face UV indices differ".into());
+        }
+    }
+    Ok(())
 }
 
 /// Parses `NAME_L3` or `NAME_MODE_L3` into the shape name, the mode and the level.
@@ -291,32 +387,19 @@ fn split_name(stem: &str) -> Option<(&str, Option<FVarLinear>, usize)> {
 }
 
 fn check_file(dir: &Path, file: &Path) -> Result<(), String> {
-    let kind = file
-        .parent()
-        .and_then(Path::file_name)
-        .and_then(|k| k.to_str())
-        .unwrap_or("");
-    let stem = file.file_stem().and_then(|s| s.to_str()).unwrap_or("");
-    let (shape_name, mode, level) = split_name(stem).ok_or("unrecognised file name")?;
-    let mode = if kind == "facevarying" { mode } else { None };
-    let shape_name = if kind == "facevarying" {
-        shape_name
-    } else {
-        stem.rsplit_once("_L").map_or(stem, |s| s.0)
-    };
-    let shape = read_shape(&dir.join("shapes").join(format!("{shape_name}.obj")))?;
+    let case = case(dir, file)?;
+    let mut shape = read_shape(&case.shape)?;
     let reference = read_reference(file)?;
-    match kind {
-        "refined" => check_refined(&shape, level, &reference),
-        "limit" => check_limit(&shape, &reference),
-        _ => {
+    match case.kind {
+        Kind::Refined => check_refined(&shape, case.level, &reference),
+        Kind::Limit => check_limit(&shape, &reference),
+        Kind::FaceVarying => {
             // The mode comes from the file name; the reference must carry UVs.
             if reference.uvs.is_empty() {
                 return Err("no vt lines in the reference".into());
             }
-            let mut shape = shape;
-            shape.options.fvar_linear = mode.ok_or("no face-varying mode in the file name")?;
-            check_refined(&shape, level, &reference)
+            shape.options.fvar_linear = case.fvar_linear.unwrap_or_default();
+            check_refined(&shape, case.level, &reference)
         }
     }
 }
