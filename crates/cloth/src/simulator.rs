@@ -102,6 +102,17 @@ impl From<CollideError> for SubstepError {
 /// solution revealed.
 const CONTACT_ROUNDS: usize = 2;
 
+/// The line search's sufficient decrease (Armijo's condition): a step α along the Newton
+/// direction d is taken when Φ falls by at least this fraction of the fall its slope foretells,
+/// α (−∇Φ · d), −∇Φ being the solve's right-hand side. Small, as usual, so that the search
+/// shortens only steps that overshoot.
+const ARMIJO: f64 = 1e-4;
+
+/// The line search halves the step until it is shorter than this, then takes it whatever Φ
+/// does: at most ten halvings, so a substep's cost stays bounded where the direction barely
+/// descends.
+const MIN_STEP: f64 = 1e-3;
+
 /// The implicit integrator of a substep.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Integrator {
@@ -845,8 +856,8 @@ impl Simulator {
                 }
                 // The last iteration's end needs only Φ, not another matrix.
                 let next = self.evaluate(!last);
-                let enough = next <= at - 1e-4 * alpha * slope;
-                if !self.settings.line_search || enough || alpha < 1e-3 || !next.is_finite() {
+                let enough = next <= at - ARMIJO * alpha * slope;
+                if !self.settings.line_search || enough || alpha < MIN_STEP || !next.is_finite() {
                     at = next;
                     break;
                 }
