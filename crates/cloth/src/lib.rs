@@ -44,6 +44,7 @@ mod reduce;
 pub mod shapes;
 pub mod simulator;
 mod strain_limit;
+mod substep;
 pub mod threads;
 
 pub use constraint::{Attachment, Contact, Motion};

@@ -62,12 +62,13 @@ use tailor_collide::CollideError;
 use tailor_subdiv::{Point, StencilTable};
 
 use crate::assemble::{Assembly, Coefficients, Environment};
-use crate::collision::{Collisions, Motion as Substep, Obstacle, Surface};
+use crate::collision::{Collisions, Obstacle, Surface};
 use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
 use crate::energy::{Mat3, Vec3};
 use crate::pcg::{Pcg, Stop};
 use crate::reduce::{partial_count, sum_by};
-use crate::strain_limit::{Floor, StrainLimiter};
+use crate::strain_limit::StrainLimiter;
+use crate::substep::{Floor, Substep};
 use crate::{ClothError, Model, StepFailure};
 
 /// Why a substep did not complete.

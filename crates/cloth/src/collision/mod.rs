@@ -73,11 +73,8 @@ use tailor_subdiv::Point;
 
 use crate::constraint::Contact;
 use crate::energy::Vec3;
-use crate::strain_limit::Floor;
+use crate::substep::{Floor, HELD_MASS, Substep};
 use crate::{ClothError, Model, Settings};
-
-/// How much heavier a vertex resting on the body is in the self-collision passes.
-const HELD_MASS: f64 = 100.0;
 
 /// The collision state of one simulator: the garment's hierarchy, the obstacle, and the
 /// buffers of the current substep.
@@ -113,72 +110,13 @@ fn relax_what_moved(
     before: &[Point],
     moved: &mut Vec<bool>,
     thickness: f64,
-    motion: &mut Motion,
-    relax: &mut impl FnMut(&mut Motion, &[bool]),
+    motion: &mut Substep,
+    relax: &mut impl FnMut(&mut Substep, &[bool]),
 ) -> Result<u32, CollideError> {
     moved.clear();
     moved.extend(before.iter().zip(motion.x.iter()).map(|(a, b)| a != b));
     relax(motion, moved);
     obstacle.project(thickness, motion)
-}
-
-/// The moving garment of one substep: start positions, and end positions and velocities the
-/// response changes.
-pub(crate) struct Motion<'a> {
-    pub h: f64,
-    pub x0: &'a [Point],
-    pub x: &'a mut [Point],
-    pub v: &'a mut [Vec3],
-    pub inverse_mass: &'a [f64],
-}
-
-impl Motion<'_> {
-    /// The same motion with other inverse masses.
-    pub fn weighted<'b>(&'b mut self, inverse_mass: &'b [f64]) -> Motion<'b> {
-        Motion {
-            h: self.h,
-            x0: self.x0,
-            x: &mut *self.x,
-            v: &mut *self.v,
-            inverse_mass,
-        }
-    }
-
-    /// Positions again from velocities, x = x₀ + h v, for every movable vertex.
-    fn sync_positions(&mut self) {
-        for (i, x) in self.x.iter_mut().enumerate() {
-            if self.inverse_mass[i] > 0.0 {
-                *x = self.x0[i] + self.v[i] * self.h;
-            }
-        }
-    }
-
-    /// Applies the impulse along unit `normal` that brings the relative normal velocity
-    /// Σ αₖ vₖ · n of `vertices` up to `target`, if it is below; each vertex's share is
-    /// αₖ / mₖ. Returns whether it changed anything.
-    fn push_apart(
-        &mut self,
-        vertices: [u32; 4],
-        alpha: [f64; 4],
-        normal: Vec3,
-        target: f64,
-    ) -> bool {
-        let mut relative = 0.0;
-        let mut weight = 0.0;
-        for (&k, &a) in vertices.iter().zip(&alpha) {
-            relative += a * self.v[k as usize].dot(&normal);
-            weight += a * a * self.inverse_mass[k as usize];
-        }
-        if relative >= target || weight <= 0.0 {
-            return false;
-        }
-        let impulse = (target - relative) / weight;
-        for (&k, &a) in vertices.iter().zip(&alpha) {
-            let k = k as usize;
-            self.v[k] += normal * (a * impulse * self.inverse_mass[k]);
-        }
-        true
-    }
 }
 
 impl Collisions {
@@ -261,7 +199,7 @@ impl Collisions {
 
     /// Coulomb friction on the body contacts (step 2 of the module docs); `residual` is the
     /// linear solve's b − A Δv, M (v₀ − v) + h f at the end of the solve linearized.
-    pub fn friction(&mut self, settings: &Settings, residual: &[Vec3], motion: &mut Motion) {
+    pub fn friction(&mut self, settings: &Settings, residual: &[Vec3], motion: &mut Substep) {
         if self.obstacle.is_some() {
             obstacle::friction(
                 &self.contacts,
@@ -290,7 +228,7 @@ impl Collisions {
     pub fn repel(
         &mut self,
         settings: &Settings,
-        motion: &mut Motion,
+        motion: &mut Substep,
     ) -> Result<&[bool], CollideError> {
         self.moved.resize(motion.x.len(), false);
         if settings.self_collision {
@@ -316,8 +254,8 @@ impl Collisions {
     pub fn resolve(
         &mut self,
         settings: &Settings,
-        motion: &mut Motion,
-        relax: &mut impl FnMut(&mut Motion, &[bool]),
+        motion: &mut Substep,
+        relax: &mut impl FnMut(&mut Substep, &[bool]),
     ) -> Result<u32, CollideError> {
         let thickness = settings.thickness;
         let mut resolved = 0;
@@ -362,8 +300,8 @@ impl Collisions {
     fn layer_impacts(
         &mut self,
         thickness: f64,
-        motion: &mut Motion,
-        relax: &mut impl FnMut(&mut Motion, &[bool]),
+        motion: &mut Substep,
+        relax: &mut impl FnMut(&mut Substep, &[bool]),
         pushed_heavier: bool,
     ) -> Result<u32, CollideError> {
         self.hold(motion.inverse_mass);
@@ -392,8 +330,8 @@ impl Collisions {
     fn recheck_layers(
         &mut self,
         thickness: f64,
-        motion: &mut Motion,
-        relax: &mut impl FnMut(&mut Motion, &[bool]),
+        motion: &mut Substep,
+        relax: &mut impl FnMut(&mut Substep, &[bool]),
     ) -> Result<u32, CollideError> {
         let h = motion.h;
         self.own_velocity.clear();

@@ -14,11 +14,10 @@
 use tailor_collide::{Closest, CollideError, Hierarchy, VertexTriangleImpact};
 use tailor_subdiv::Point;
 
-use super::Motion;
 use super::surface::Surface;
 use crate::constraint::Contact;
 use crate::energy::Vec3;
-use crate::strain_limit::Floor;
+use crate::substep::{Floor, Substep};
 use crate::{ClothError, Settings};
 
 /// Rounds of the continuous pass: each re-tests the paths the last one changed.
@@ -222,7 +221,7 @@ impl Obstacle {
         &mut self,
         cloth: &mut Hierarchy,
         thickness: f64,
-        m: &mut Motion,
+        m: &mut Substep,
     ) -> Result<u32, CollideError> {
         let [start, end] = &self.substep;
         self.hierarchy.refit_swept(start, end, 0.0)?;
@@ -281,7 +280,7 @@ impl Obstacle {
 
     /// Pushes every vertex closer to the body than half the thickness (or behind a face) out
     /// to half the thickness, removing its velocity into the body. Returns how many it moved.
-    pub fn project(&mut self, thickness: f64, m: &mut Motion) -> Result<u32, CollideError> {
+    pub fn project(&mut self, thickness: f64, m: &mut Substep) -> Result<u32, CollideError> {
         self.hierarchy.refit(&self.substep[1], 0.0)?;
         let closest = self.hierarchy.closest_points(m.x, thickness)?;
         let floor = 0.5 * thickness;
@@ -309,7 +308,7 @@ impl Obstacle {
         &self,
         surface: &mut Surface,
         thickness: f64,
-        m: &mut Motion,
+        m: &mut Substep,
     ) -> Result<u32, CollideError> {
         surface.clear(&self.hierarchy, |c| self.velocity_at(c), thickness, m)
     }
@@ -345,7 +344,7 @@ pub(super) fn friction(
     contacts: &[Contact],
     residual: &[Vec3],
     mu: f64,
-    m: &mut Motion,
+    m: &mut Substep,
     pulling: &mut [bool],
 ) {
     pulling.fill(false);

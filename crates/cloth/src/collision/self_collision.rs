@@ -6,7 +6,7 @@
 //! on the four vertices of a vertex–triangle pair (weights 1, −w₀, −w₁, −w₂ with w the
 //! barycentric coordinates) or an edge–edge pair (1 − s, s, −(1 − u), −u), each moving by its
 //! weight over its mass, which changes the relative velocity of the two contact points by the
-//! impulse times Σ αₖ² / mₖ ([`Motion::push_apart`]). The normal-cone culling of the collide
+//! impulse times Σ αₖ² / mₖ ([`Substep::push_apart`]). The normal-cone culling of the collide
 //! crate keeps both queries cheap where the cloth is smooth.
 //!
 //! **What repulsion leaves alone.** A mesh with edges shorter than the thickness has, in its
@@ -47,8 +47,8 @@
 use tailor_collide::{CollideError, Hierarchy, Impacts, LocalFaces, Neighbours};
 use tailor_subdiv::Point;
 
-use super::Motion;
 use crate::energy::Vec3;
+use crate::substep::Substep;
 
 /// Rounds of impulses before impact zones take over (rigid zones strain the cloth around
 /// them: with 6 rounds the 64² drape needed zones in its pleats and ended 13% strained).
@@ -99,7 +99,7 @@ impl Buffers {
 pub(super) fn repel(
     cloth: &mut Hierarchy,
     thickness: f64,
-    m: &mut Motion,
+    m: &mut Substep,
     buffers: &mut Buffers,
     moved: &mut [bool],
 ) -> Result<(), CollideError> {
@@ -186,7 +186,7 @@ impl Pair {
 
     /// The contact normal at the time of impact, pointing the way the first feature was
     /// relative to the second at the start; `None` when it is undefined.
-    fn normal(&self, m: &Motion) -> Option<Vec3> {
+    fn normal(&self, m: &Substep) -> Option<Vec3> {
         let at = |k: u32| {
             let k = k as usize;
             m.x0[k] + (m.x[k] - m.x0[k]) * self.time
@@ -211,9 +211,9 @@ impl Pair {
 pub(super) fn resolve_impacts(
     cloth: &mut Hierarchy,
     thickness: f64,
-    m: &mut Motion,
+    m: &mut Substep,
     buffers: &mut Buffers,
-    relax: &mut impl FnMut(&mut Motion, &[bool]),
+    relax: &mut impl FnMut(&mut Substep, &[bool]),
 ) -> Result<u32, CollideError> {
     let Buffers {
         impacts, touched, ..
@@ -252,7 +252,7 @@ pub(super) fn resolve_impacts(
 /// two of its features cannot meet during the substep if they did not touch at its start.
 fn impact_zones(
     cloth: &mut Hierarchy,
-    m: &mut Motion,
+    m: &mut Substep,
     impacts: &mut Impacts,
 ) -> Result<u32, CollideError> {
     let n = m.v.len();
