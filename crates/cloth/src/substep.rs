@@ -57,6 +57,16 @@ impl Substep<'_> {
         }
     }
 
+    /// Removes vertex `i`'s velocity into the body along the unit `normal` away from it,
+    /// relative to `body`, the body's velocity there, if it approaches: what is left slides
+    /// along the body or leaves it (an inelastic contact).
+    pub fn stop_approach(&mut self, i: usize, normal: Vec3, body: Vec3) {
+        let closing = (self.v[i] - body).dot(&normal);
+        if closing < 0.0 {
+            self.v[i] -= normal * closing;
+        }
+    }
+
     /// Applies the impulse along unit `normal` that brings the relative normal velocity
     /// Σ αₖ vₖ · n of `vertices` up to `target`, if it is below; each vertex's share is
     /// αₖ / mₖ. Returns whether it changed anything.

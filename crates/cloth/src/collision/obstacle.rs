@@ -263,11 +263,7 @@ impl Obstacle {
                     continue;
                 }
                 m.x[i] = point(end) + normal * thickness;
-                let body = (point(end) - point(start)) / m.h;
-                let closing = (m.v[i] - body).dot(&normal);
-                if closing < 0.0 {
-                    m.v[i] -= normal * closing;
-                }
+                m.stop_approach(i, normal, (point(end) - point(start)) / m.h);
                 changed = true;
                 moved += 1;
             }
@@ -292,10 +288,7 @@ impl Obstacle {
                 continue;
             }
             m.x[i] = c.point + normal * (floor * (1.0 + PROJECTION_SLACK));
-            let closing = (m.v[i] - self.velocity_at(c)).dot(&normal);
-            if closing < 0.0 {
-                m.v[i] -= normal * closing;
-            }
+            m.stop_approach(i, normal, self.velocity_at(c));
             moved += 1;
         }
         Ok(moved)

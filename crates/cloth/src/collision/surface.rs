@@ -119,10 +119,7 @@ impl Surface {
                     continue;
                 };
                 m.x[j] += lift;
-                let closing = (m.v[j] - self.body[j] / w).dot(&normal);
-                if closing < 0.0 {
-                    m.v[j] -= normal * closing;
-                }
+                m.stop_approach(j, normal, self.body[j] / w);
                 moved += 1;
             }
         }
