@@ -29,7 +29,7 @@
 //! CG warm-started at v̂ and stopped relative to the residual there (see
 //! [`Settings::cg_tolerance`]).
 //! When the solution takes free vertices into the body, they become contacts and the same
-//! system is solved again from it (up to `CONTACT_ROUNDS` times; see the `collision` module).
+//! system is solved again from it (up to `CONTACT_ROUNDS` times; see the `response` module).
 //! With `newton_iterations > 1`, further iterations re-linearize at the new iterate; R is the
 //! gradient of the *incremental potential*
 //!
@@ -40,11 +40,8 @@
 //! decreases enough (Armijo). Stiffness Hessians are projected to PSD ([`crate::energy`]), so
 //! the matrix is SPD, CG converges and every Newton direction descends.
 //!
-//! After the solve, friction acts on the integrator's own velocities (its impulses are the
-//! solve's). The other collision passes (strain limiting, repulsion, impacts, projection)
-//! work on the straight path from x₀ to x₁ and its velocity u = (x₁ − x₀)/h, as Bridson et
-//! al.'s response does; a vertex they leave alone ends with the integrator's v₁, one they
-//! change with the velocity u of its corrected path.
+//! After the solve, the collision response (the `response` module) applies friction, strain
+//! limiting and the collision passes to the end positions and velocities.
 //!
 //! The last iteration ends without evaluating the forces again when there is no line search
 //! to decide: friction reads the contact impulses of the solve itself, b − A Δv on the contact
@@ -62,13 +59,12 @@ use tailor_collide::CollideError;
 use tailor_subdiv::{Point, StencilTable};
 
 use crate::assemble::{Assembly, Coefficients, Environment};
-use crate::collision::{Collisions, Obstacle, Surface};
 use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
 use crate::energy::{Mat3, Vec3};
 use crate::pcg::{Pcg, Stop};
 use crate::reduce::{partial_count, sum_by};
-use crate::strain_limit::StrainLimiter;
-use crate::substep::{Floor, Substep};
+use crate::response::Response;
+use crate::substep::Substep;
 use crate::{ClothError, Model, StepFailure};
 
 /// Why a substep did not complete.
@@ -305,8 +301,6 @@ struct Work {
     filter: Filter,
     /// 1 / mass, zero for a vertex whose position the constraints prescribe.
     inverse_mass: Vec<f64>,
-    /// The floors of strain limiting above the body.
-    floors: Vec<Floor>,
     partials: Vec<f64>,
 }
 
@@ -318,8 +312,7 @@ pub struct Simulator {
     constraints: Constraints,
     assembly: Assembly,
     pcg: Pcg,
-    collisions: Collisions,
-    strain_limiter: StrainLimiter,
+    response: Response,
     work: Work,
 }
 
@@ -382,8 +375,7 @@ impl Simulator {
             settings.project_hessians,
         );
         Ok(Self {
-            collisions: Collisions::new(&model, &settings)?,
-            strain_limiter: StrainLimiter::new(&model.springs, n),
+            response: Response::new(&model, &settings)?,
             constraints: Constraints::new(n),
             pcg: Pcg::new(&assembly.matrix),
             assembly,
@@ -402,7 +394,6 @@ impl Simulator {
                 rhs: vec![Vec3::zeros(); n],
                 filter: Filter::new(n),
                 inverse_mass: vec![0.0; n],
-                floors: vec![Floor::NONE; n],
                 partials: vec![0.0; partial_count(n)],
             },
             model,
@@ -471,8 +462,9 @@ impl Simulator {
         face_offsets: &[u32],
         face_vertices: &[u32],
     ) -> Result<(), ClothError> {
-        self.collisions.obstacle = Some(Obstacle::new(positions, face_offsets, face_vertices)?);
-        Ok(())
+        self.response
+            .collisions_mut()
+            .set_obstacle(positions, face_offsets, face_vertices)
     }
 
     /// Makes the clearance from the obstacle hold for the refined surface `stencils` evaluates
@@ -492,7 +484,7 @@ impl Simulator {
                 expected,
             });
         }
-        self.collisions.surface = Some(Surface::new(stencils));
+        self.response.collisions_mut().set_surface(stencils);
         Ok(())
     }
 
@@ -501,7 +493,7 @@ impl Simulator {
     /// next). A checkpoint must keep it for a resumed run to compute the same bits.
     #[must_use]
     pub fn carried_contacts(&self) -> &[bool] {
-        self.collisions.pulling()
+        self.response.collisions().pulling()
     }
 
     /// Restores [`Self::carried_contacts`] from a checkpoint.
@@ -509,7 +501,7 @@ impl Simulator {
     /// # Errors
     /// [`ClothError::WrongLength`] when `flags` does not have one entry per vertex.
     pub fn restore_carried_contacts(&mut self, flags: &[bool]) -> Result<(), ClothError> {
-        let expected = self.collisions.pulling().len();
+        let expected = self.response.collisions().pulling().len();
         if flags.len() != expected {
             return Err(ClothError::WrongLength {
                 what: "carried contacts",
@@ -517,7 +509,7 @@ impl Simulator {
                 expected,
             });
         }
-        self.collisions.set_pulling(flags);
+        self.response.collisions_mut().set_pulling(flags);
         Ok(())
     }
 
@@ -536,10 +528,9 @@ impl Simulator {
         t1: f64,
         end: &[Point],
     ) -> Result<(), ClothError> {
-        match &mut self.collisions.obstacle {
-            Some(obstacle) => obstacle.set_motion(t0, start, t1, end),
-            None => Err(ClothError::NoObstacle),
-        }
+        self.response
+            .collisions_mut()
+            .set_obstacle_motion(t0, start, t1, end)
     }
 
     fn check_state(&self, state: &State, dt: f64) -> Result<u32, ClothError> {
@@ -718,7 +709,7 @@ impl Simulator {
         }
     }
 
-    /// The second look at the body (step 1 of [`crate::collision`]): vertices the solve's
+    /// The second look at the body (step 1 of [`crate::response`]): vertices the solve's
     /// result `v + delta` takes into the body become contacts and the same linear system is
     /// solved again with them constrained, from the last solution, up to
     /// [`CONTACT_ROUNDS`] times. Without it a vertex the first look missed (released, or
@@ -739,7 +730,8 @@ impl Simulator {
             let s = &w.filter.s;
             let free = |i: usize| s[i] == Mat3::identity();
             if self
-                .collisions
+                .response
+                .collisions_mut()
                 .missed_contacts(&self.settings, h, &w.x0, &w.x, free)
                 == 0
             {
@@ -765,7 +757,7 @@ impl Simulator {
             &w.x0,
             t1,
             h,
-            &self.collisions.contacts,
+            self.response.collisions().contacts(),
             &mut w.filter,
         );
     }
@@ -811,7 +803,8 @@ impl Simulator {
         let w = &mut self.work;
         w.x0.copy_from_slice(&state.positions);
         w.v0.copy_from_slice(&state.velocities);
-        self.collisions
+        self.response
+            .collisions_mut()
             .before_solve(&self.settings, state.time, h, &w.x0, &w.v0)?;
         self.prepare_filter(t1, h);
         self.prepare_base(h, state.previous.as_ref());
@@ -882,71 +875,25 @@ impl Simulator {
         if !finite {
             return Err(StepFailure::NonFinite.into());
         }
-        // Friction first, as a force of the integrator's own step (its impulses are the
-        // solve's, and positions follow as x = x̂ + ĥ v): strain limiting and the collision
-        // passes have the last word.
-        let mut motion = Substep {
+        let integrator = Substep {
             h: w.base_step,
             x0: &w.base,
             x: &mut w.x,
             v: &mut w.trial,
             inverse_mass: &w.inverse_mass,
         };
-        self.collisions
-            .friction(&self.settings, &w.impulse, &mut motion);
-        // The other passes see the straight path from x₀ to x and its velocity
-        // u = (x − x₀) / h (backward Euler's own): w.v keeps u, w.delta what the integrator's
-        // end velocity adds to it, v − u.
-        for i in 0..w.x.len() {
-            let average = (w.x[i] - w.x0[i]) / h;
-            w.delta[i] = w.trial[i] - average;
-            w.trial[i] = average;
-            w.v[i] = average;
-        }
-        let mut motion = Substep {
-            h,
-            x0: &w.x0,
-            x: &mut w.x,
-            v: &mut w.trial,
-            inverse_mass: &w.inverse_mass,
-        };
-        let limit = self.settings.strain_limit;
-        if limit > 0.0 {
-            self.collisions
-                .floors(&self.settings, h, &w.x0, &mut w.floors);
-            report.strain_corrections +=
-                self.strain_limiter
-                    .limit(&self.model.springs, limit, &mut motion, &w.floors);
-        }
-        let repelled = self.collisions.repel(&self.settings, &mut motion)?;
-        // Collision impulses stop features approaching at once, which strains the edges
-        // around them: limit again after them, the cloth around taking up the slack.
-        let (limiter, springs) = (&mut self.strain_limiter, &self.model.springs);
-        let floors = &w.floors;
-        let mut relax = |m: &mut Substep, moved: &[bool]| {
-            if limit > 0.0 && moved.contains(&true) {
-                report.strain_corrections += limiter.limit_around(springs, limit, m, floors, moved);
-            }
-        };
-        relax(&mut motion, repelled);
-        let impacts = self
-            .collisions
-            .resolve(&self.settings, &mut motion, &mut relax)?;
-        // A vertex the passes left alone ends with the integrator's velocity; one they
-        // changed (stopped by an impact, pushed, limited) with the velocity of its corrected
-        // path, as backward Euler's would: the impulse that changed its path also took the
-        // acceleration the path no longer has.
-        for ((v, excess), average) in w.trial.iter_mut().zip(&w.delta).zip(&w.v) {
-            if v == average {
-                *v += excess;
-            }
-        }
+        let springs = &self.model.springs;
+        let impacts =
+            self.response
+                .after_solve(&self.settings, springs, integrator, &w.x0, h, &w.impulse);
+        report.strain_corrections += self.response.take_strain_corrections();
+        let impacts = impacts?;
         state.remember(h);
         state.positions.copy_from_slice(&w.x);
         state.velocities.copy_from_slice(&w.trial);
         state.time = t1;
         report.substeps += 1;
-        report.contacts = self.collisions.contacts.len() as u32;
+        report.contacts = self.response.collisions().contacts().len() as u32;
         report.impacts += impacts;
         Ok(())
     }

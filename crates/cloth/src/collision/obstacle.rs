@@ -1,6 +1,6 @@
 //! The obstacle: a polygon mesh of fixed topology (the body) whose positions the caller gives at
 //! the start and end of each frame; substeps interpolate linearly between them, so every body
-//! vertex moves with the constant velocity (end − start) / (t₁ − t₀) (see [`crate::collision`]
+//! vertex moves with the constant velocity (end − start) / (t₁ − t₀) (see [`crate::response`]
 //! for where each pass sits in the step).
 //!
 //! Contacts and the final projection use the closest body point of each cloth vertex
@@ -136,7 +136,7 @@ impl Obstacle {
             .sum()
     }
 
-    /// Contact constraints for the substep (step 1 of [`crate::collision`]): every vertex not
+    /// Contact constraints for the substep (step 1 of [`crate::response`]): every vertex not
     /// `pulling` that would end closer than the thickness if it kept its velocity plus
     /// gravity's pull. Looks as far as the fastest cloth vertex and body vertex can close in
     /// one substep.
@@ -215,7 +215,7 @@ impl Obstacle {
     }
 
     /// Puts back on the front of a body face every vertex whose path over the substep enters
-    /// that face from the front (step 5 of [`crate::collision`]), at the thickness, with no
+    /// that face from the front (step 5 of [`crate::response`]), at the thickness, with no
     /// velocity into the face. Returns how many vertices it moved.
     pub fn resolve_impacts(
         &mut self,
@@ -330,7 +330,7 @@ pub(super) fn away_from(q: Point, c: &Closest) -> (Vec3, f64) {
     }
 }
 
-/// Coulomb friction on the contact vertices (step 2 of [`crate::collision`]): the normal
+/// Coulomb friction on the contact vertices (step 2 of [`crate::response`]): the normal
 /// impulse jₙ = −residual · n the contact exerted may remove up to μ jₙ / m of the tangential
 /// velocity relative to the body. A contact that pulled (jₙ < 0) is marked in `pulling`.
 pub(super) fn friction(
