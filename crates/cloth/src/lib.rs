@@ -43,6 +43,7 @@ mod multigrid;
 pub mod pcg;
 mod reduce;
 mod response;
+mod settings;
 pub mod shapes;
 pub mod simulator;
 mod strain_limit;

@@ -74,9 +74,10 @@ use crate::collision::Collisions;
 use crate::constraint::Contact;
 use crate::energy::Vec3;
 use crate::model::Springs;
+use crate::settings::Settings;
 use crate::strain_limit::StrainLimiter;
 use crate::substep::{Floor, HELD_MASS, Substep};
-use crate::{ClothError, Model, Settings};
+use crate::{ClothError, Model};
 
 /// Rounds of self-impact impulses before impact zones take over (rigid zones strain the cloth
 /// around them: with 6 rounds the 64² drape needed zones in its pleats and ended 13% strained).

@@ -27,8 +27,9 @@ use tailor_subdiv::{Point, StencilTable};
 
 use crate::constraint::Contact;
 use crate::energy::Vec3;
+use crate::settings::Settings;
 use crate::substep::{Floor, Substep};
-use crate::{ClothError, Model, Settings};
+use crate::{ClothError, Model};
 
 /// The collision state of one simulator: the garment's hierarchy, the obstacle, and the
 /// buffers of the current substep.
@@ -222,15 +223,22 @@ impl Collisions {
     }
 
     /// The lift of the refined surface (step 6 of [`crate::response`]), when there is an
-    /// obstacle and a surface; call after [`Self::project`]. Returns how many control-point
-    /// moves it made.
+    /// obstacle and a surface: the garment is lifted until the surface clears the body by
+    /// `thickness` at the substep's end ([`surface`]); call after [`Self::project`] or
+    /// [`Self::push_out`], which refit the body's hierarchy there. Returns how many
+    /// control-point moves it made.
     pub fn clear_surface(
         &mut self,
         thickness: f64,
         motion: &mut Substep,
     ) -> Result<u32, CollideError> {
         match (&self.obstacle, &mut self.surface) {
-            (Some(obstacle), Some(surface)) => obstacle.clear_surface(surface, thickness, motion),
+            (Some(obstacle), Some(surface)) => surface.clear(
+                obstacle.hierarchy(),
+                |c| obstacle.velocity_at(c),
+                thickness,
+                motion,
+            ),
             _ => Ok(0),
         }
     }

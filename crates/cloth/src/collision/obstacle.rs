@@ -14,11 +14,11 @@
 use tailor_collide::{Closest, CollideError, Hierarchy, VertexTriangleImpact};
 use tailor_subdiv::Point;
 
-use super::surface::Surface;
+use crate::ClothError;
 use crate::constraint::Contact;
 use crate::energy::Vec3;
+use crate::settings::Settings;
 use crate::substep::{Floor, Substep};
-use crate::{ClothError, Settings};
 
 /// Rounds of the continuous pass: each re-tests the paths the last one changed.
 const IMPACT_ROUNDS: usize = 4;
@@ -130,7 +130,7 @@ impl Obstacle {
     }
 
     /// The body's velocity at a closest point.
-    fn velocity_at(&self, c: &Closest) -> Vec3 {
+    pub fn velocity_at(&self, c: &Closest) -> Vec3 {
         (0..3)
             .map(|k| self.velocity[c.vertices[k] as usize] * c.barycentric[k])
             .sum()
@@ -294,16 +294,10 @@ impl Obstacle {
         Ok(moved)
     }
 
-    /// Lifts the garment until its refined `surface` clears the body by `thickness` at the
-    /// substep's end ([`super::surface`]); call after [`Self::project`], which refits the
-    /// hierarchy there. Returns how many control-point moves it made.
-    pub fn clear_surface(
-        &self,
-        surface: &mut Surface,
-        thickness: f64,
-        m: &mut Substep,
-    ) -> Result<u32, CollideError> {
-        surface.clear(&self.hierarchy, |c| self.velocity_at(c), thickness, m)
+    /// The body's hierarchy, refit where the last [`Self::project`] left it: at the
+    /// substep's end.
+    pub fn hierarchy(&self) -> &Hierarchy {
+        &self.hierarchy
     }
 }
 
