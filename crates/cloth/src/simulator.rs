@@ -607,7 +607,7 @@ impl Simulator {
         }
         let (f, lag) = (&w.filter, h - w.base_step);
         for i in 0..w.x0.len() {
-            if f.s[i] != Mat3::identity() {
+            if !f.is_free(i) {
                 let held = w.x0[i] + f.z[i] * lag;
                 let toward = (Mat3::identity() - f.s[i]) * (held - w.base[i]);
                 w.base[i] += toward;
@@ -641,13 +641,13 @@ impl Simulator {
             for (i, x) in w.x.iter_mut().enumerate() {
                 *x = w.base[i] + (w.v[i] + w.delta[i]) * w.base_step;
             }
-            let s = &w.filter.s;
-            let free = |i: usize| s[i] == Mat3::identity();
-            if self
-                .response
-                .collisions_mut()
-                .missed_contacts(&self.settings, h, &w.x0, &w.x, free)
-                == 0
+            if self.response.collisions_mut().missed_contacts(
+                &self.settings,
+                h,
+                &w.x0,
+                &w.x,
+                &w.filter,
+            ) == 0
             {
                 break;
             }

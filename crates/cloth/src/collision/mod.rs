@@ -25,7 +25,7 @@ use surface::Surface;
 use tailor_collide::{CollideError, Hierarchy};
 use tailor_subdiv::{Point, StencilTable};
 
-use crate::constraint::Contact;
+use crate::constraint::{Contact, Filter};
 use crate::energy::Vec3;
 use crate::settings::Settings;
 use crate::substep::{Floor, Substep};
@@ -137,7 +137,7 @@ impl Collisions {
     }
 
     /// Adds to [`Self::contacts`] the body contacts the solve missed (see
-    /// [`Obstacle::missed_contacts`]) for vertices `free` says are unconstrained, given the
+    /// [`Obstacle::missed_contacts`]) for the vertices `filter` leaves free, given the
     /// solve's end positions `x`; returns how many.
     pub fn missed_contacts(
         &mut self,
@@ -145,10 +145,10 @@ impl Collisions {
         h: f64,
         x0: &[Point],
         x: &[Point],
-        free: impl Fn(usize) -> bool,
+        filter: &Filter,
     ) -> usize {
         self.obstacle.as_ref().map_or(0, |obstacle| {
-            obstacle.missed_contacts(settings.thickness, h, x0, x, free, &mut self.contacts)
+            obstacle.missed_contacts(settings.thickness, h, x0, x, filter, &mut self.contacts)
         })
     }
 

@@ -15,7 +15,7 @@ use tailor_collide::{Closest, CollideError, Hierarchy, VertexTriangleImpact};
 use tailor_subdiv::Point;
 
 use crate::ClothError;
-use crate::constraint::Contact;
+use crate::constraint::{Contact, Filter};
 use crate::energy::Vec3;
 use crate::settings::Settings;
 use crate::substep::{Floor, Substep};
@@ -170,8 +170,8 @@ impl Obstacle {
         Ok(())
     }
 
-    /// Contacts the solve missed (step 1's second look): each vertex `free` says is
-    /// unconstrained that ends the substep at `x` closer than half the thickness to the moving
+    /// Contacts the solve missed (step 1's second look): each vertex `filter` leaves free
+    /// that ends the substep at `x` closer than half the thickness to the moving
     /// plane of its start's closest body point (found by the last [`Self::find_contacts`])
     /// gets the contact that call would have given it, appended to `out`. Returns how many.
     pub fn missed_contacts(
@@ -180,13 +180,13 @@ impl Obstacle {
         h: f64,
         x0: &[Point],
         x: &[Point],
-        free: impl Fn(usize) -> bool,
+        filter: &Filter,
         out: &mut Vec<Contact>,
     ) -> usize {
         let before = out.len();
         for (i, c) in self.closest.iter().enumerate() {
             let Some(c) = c else { continue };
-            if !free(i) {
+            if !filter.is_free(i) {
                 continue;
             }
             let (normal, distance) = away_from(x0[i], c);
@@ -360,6 +360,7 @@ pub(super) fn friction(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::energy::Mat3;
     use crate::shapes::block;
 
     #[test]
@@ -387,8 +388,10 @@ mod tests {
         assert!(contacts.is_empty());
         // The solve ends vertex 0 at 1 cm, vertex 1 and 2 at 1 mm (pulled in by the cloth).
         let x = [0.01, 0.001, 0.001].map(|y| Point::new(0.0, y, 0.0));
+        let mut filter = Filter::new(3);
+        filter.s[2] = Mat3::zeros();
         let added =
-            obstacle.missed_contacts(settings.thickness, h, &x0, &x, |i| i != 2, &mut contacts);
+            obstacle.missed_contacts(settings.thickness, h, &x0, &x, &filter, &mut contacts);
         assert_eq!(added, 1);
         let c = &contacts[0];
         assert_eq!(c.vertex, 1);
