@@ -138,6 +138,11 @@ impl Filter {
             placed: vec![false; n],
         }
     }
+
+    /// Whether vertex `i` is unconstrained: its filter is the identity.
+    pub fn is_free(&self, i: usize) -> bool {
+        self.s[i] == Mat3::identity()
+    }
 }
 
 fn check_vertex(what: &'static str, vertex: u32, count: usize) -> Result<(), ClothError> {

@@ -16,7 +16,8 @@
 //! [`simulator`] the per-step evaluation.
 //!
 //! Collisions go through `tailor-collide` (Bridson, Fedkiw & Anderson 2002; the private
-//! `collision` module documents each pass). The obstacle is a polygon mesh of fixed topology:
+//! `collision` module documents each pass, the private `response` module the order a substep
+//! runs them in, with strain limiting between them). The obstacle is a polygon mesh of fixed topology:
 //! [`Simulator::set_obstacle`] once with its rest positions and CSR faces (the positions guide
 //! the hierarchy, which is built once; this is the one difference from the pipeline's sketch,
 //! which had no positions), then [`Simulator::set_obstacle_motion`] per frame with its
@@ -41,9 +42,12 @@ pub mod model;
 mod multigrid;
 pub mod pcg;
 mod reduce;
+mod response;
+mod settings;
 pub mod shapes;
 pub mod simulator;
 mod strain_limit;
+mod substep;
 pub mod threads;
 
 pub use constraint::{Attachment, Contact, Motion};

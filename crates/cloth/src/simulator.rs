@@ -29,7 +29,7 @@
 //! CG warm-started at v̂ and stopped relative to the residual there (see
 //! [`Settings::cg_tolerance`]).
 //! When the solution takes free vertices into the body, they become contacts and the same
-//! system is solved again from it (up to `CONTACT_ROUNDS` times; see the `collision` module).
+//! system is solved again from it (up to `CONTACT_ROUNDS` times; see the `response` module).
 //! With `newton_iterations > 1`, further iterations re-linearize at the new iterate; R is the
 //! gradient of the *incremental potential*
 //!
@@ -40,11 +40,8 @@
 //! decreases enough (Armijo). Stiffness Hessians are projected to PSD ([`crate::energy`]), so
 //! the matrix is SPD, CG converges and every Newton direction descends.
 //!
-//! After the solve, friction acts on the integrator's own velocities (its impulses are the
-//! solve's). The other collision passes (strain limiting, repulsion, impacts, projection)
-//! work on the straight path from x₀ to x₁ and its velocity u = (x₁ − x₀)/h, as Bridson et
-//! al.'s response does; a vertex they leave alone ends with the integrator's v₁, one they
-//! change with the velocity u of its corrected path.
+//! After the solve, the collision response (the `response` module) applies friction, strain
+//! limiting and the collision passes to the end positions and velocities.
 //!
 //! The last iteration ends without evaluating the forces again when there is no line search
 //! to decide: friction reads the contact impulses of the solve itself, b − A Δv on the contact
@@ -61,13 +58,14 @@
 use tailor_collide::CollideError;
 use tailor_subdiv::{Point, StencilTable};
 
-use crate::assemble::{Assembly, Coefficients, Environment};
-use crate::collision::{Collisions, Motion as Substep, Obstacle, Surface};
+use crate::assemble::{Assembly, Coefficients};
 use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
 use crate::energy::{Mat3, Vec3};
 use crate::pcg::{Pcg, Stop};
 use crate::reduce::{partial_count, sum_by};
-use crate::strain_limit::{Floor, StrainLimiter};
+use crate::response::Response;
+pub use crate::settings::{Integrator, Settings};
+use crate::substep::Substep;
 use crate::{ClothError, Model, StepFailure};
 
 /// Why a substep did not complete.
@@ -102,92 +100,16 @@ impl From<CollideError> for SubstepError {
 /// solution revealed.
 const CONTACT_ROUNDS: usize = 2;
 
-/// The implicit integrator of a substep.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Integrator {
-    /// Second-order backward differentiation (Choi & Ko 2002), started by one trapezoidal
-    /// substep: results change little with the step, as long as the step resolves the
-    /// garment's folding (`tailor simulate`'s default, at five substeps a frame).
-    Bdf2,
-    /// Baraff & Witkin's first-order backward Euler, which damps motion in proportion to the
-    /// step: [`Settings::default`]'s, robust at two substeps a frame.
-    BackwardEuler,
-}
+/// The line search's sufficient decrease (Armijo's condition): a step α along the Newton
+/// direction d is taken when Φ falls by at least this fraction of the fall its slope foretells,
+/// α (−∇Φ · d), −∇Φ being the solve's right-hand side. Small, as usual, so that the search
+/// shortens only steps that overshoot.
+const ARMIJO: f64 = 1e-4;
 
-/// How the simulator steps. The defaults are the library's (backward Euler at two substeps a
-/// frame at 24 fps, no self-collision); a `tailor` scene has its own (BDF2 at five,
-/// self-collision on), for the reasons the README's Decisions give.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Settings {
-    /// Longest substep, seconds (default 1/48: 2 substeps per frame at 24 fps).
-    pub max_substep: f64,
-    /// The implicit integrator (see the module docs).
-    pub integrator: Integrator,
-    /// Newton iterations per substep; 1 is Baraff & Witkin's linearly implicit step.
-    pub newton_iterations: u32,
-    /// Backtracking line search on the incremental potential in each Newton iteration.
-    pub line_search: bool,
-    /// Conjugate gradients stop when the filtered residual is this fraction of the residual
-    /// of their warm start at the last velocity, that is of the substep's impulses h (f₀ +
-    /// h ∂f/∂x v₀ + ∂f/∂v v₀), not of the whole right-hand side with its momentum M v₀: so
-    /// every substep applies its forces to the same relative accuracy however many substeps
-    /// a frame there are. Default 1e-2: strain limiting and the collision passes after the
-    /// solve see to the figures that matter.
-    pub cg_tolerance: f64,
-    /// Conjugate-gradient iterations before a solve counts as failed.
-    pub cg_max_iterations: u32,
-    /// How many times a failing substep may be halved.
-    pub max_halvings: u32,
-    /// Gravity, m/s².
-    pub gravity: Vec3,
-    /// Wind velocity that air drag pulls towards, m/s.
-    pub wind: Vec3,
-    /// Project element Hessians to PSD (turn off only to study the raw Jacobians).
-    pub project_hessians: bool,
-    /// Collision thickness, m: contacts hold the cloth this far from the obstacle, no vertex
-    /// ends closer than half of it (no point of the refined surface closer than all of it,
-    /// with [`Simulator::set_collision_surface`]), and cloth layers repel within it.
-    pub thickness: f64,
-    /// Coulomb friction coefficient μ between cloth and obstacle.
-    pub friction: f64,
-    /// Whether the cloth collides with itself.
-    pub self_collision: bool,
-    /// Strain limit: after each solve no edge stays stretched or squashed by more than this
-    /// fraction of its rest length (the `strain_limit` module, after Provot 1995); 0 turns it
-    /// off.
-    pub strain_limit: f64,
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Self {
-            max_substep: 1.0 / 48.0,
-            integrator: Integrator::BackwardEuler,
-            newton_iterations: 1,
-            line_search: false,
-            cg_tolerance: 1e-2,
-            cg_max_iterations: 2000,
-            max_halvings: 4,
-            gravity: Vec3::new(0.0, -9.81, 0.0),
-            wind: Vec3::zeros(),
-            project_hessians: true,
-            thickness: 0.005,
-            friction: 0.3,
-            self_collision: false,
-            strain_limit: 0.1,
-        }
-    }
-}
-
-impl Settings {
-    /// The world the cloth moves in.
-    fn environment(&self) -> Environment {
-        Environment {
-            gravity: self.gravity,
-            wind: self.wind,
-        }
-    }
-}
+/// The line search halves the step until it is shorter than this, then takes it whatever Φ
+/// does: at most ten halvings, so a substep's cost stays bounded where the direction barely
+/// descends.
+const MIN_STEP: f64 = 1e-3;
 
 /// Positions and velocities of the particles at a time, and the substep before it.
 #[derive(Clone, Debug, PartialEq)]
@@ -293,8 +215,6 @@ struct Work {
     filter: Filter,
     /// 1 / mass, zero for a vertex whose position the constraints prescribe.
     inverse_mass: Vec<f64>,
-    /// The floors of strain limiting above the body.
-    floors: Vec<Floor>,
     partials: Vec<f64>,
 }
 
@@ -306,8 +226,7 @@ pub struct Simulator {
     constraints: Constraints,
     assembly: Assembly,
     pcg: Pcg,
-    collisions: Collisions,
-    strain_limiter: StrainLimiter,
+    response: Response,
     work: Work,
 }
 
@@ -370,8 +289,7 @@ impl Simulator {
             settings.project_hessians,
         );
         Ok(Self {
-            collisions: Collisions::new(&model, &settings)?,
-            strain_limiter: StrainLimiter::new(&model.springs, n),
+            response: Response::new(&model, &settings)?,
             constraints: Constraints::new(n),
             pcg: Pcg::new(&assembly.matrix),
             assembly,
@@ -390,7 +308,6 @@ impl Simulator {
                 rhs: vec![Vec3::zeros(); n],
                 filter: Filter::new(n),
                 inverse_mass: vec![0.0; n],
-                floors: vec![Floor::NONE; n],
                 partials: vec![0.0; partial_count(n)],
             },
             model,
@@ -459,8 +376,9 @@ impl Simulator {
         face_offsets: &[u32],
         face_vertices: &[u32],
     ) -> Result<(), ClothError> {
-        self.collisions.obstacle = Some(Obstacle::new(positions, face_offsets, face_vertices)?);
-        Ok(())
+        self.response
+            .collisions_mut()
+            .set_obstacle(positions, face_offsets, face_vertices)
     }
 
     /// Makes the clearance from the obstacle hold for the refined surface `stencils` evaluates
@@ -480,7 +398,7 @@ impl Simulator {
                 expected,
             });
         }
-        self.collisions.surface = Some(Surface::new(stencils));
+        self.response.collisions_mut().set_surface(stencils);
         Ok(())
     }
 
@@ -489,7 +407,7 @@ impl Simulator {
     /// next). A checkpoint must keep it for a resumed run to compute the same bits.
     #[must_use]
     pub fn carried_contacts(&self) -> &[bool] {
-        self.collisions.pulling()
+        self.response.collisions().pulling()
     }
 
     /// Restores [`Self::carried_contacts`] from a checkpoint.
@@ -497,7 +415,7 @@ impl Simulator {
     /// # Errors
     /// [`ClothError::WrongLength`] when `flags` does not have one entry per vertex.
     pub fn restore_carried_contacts(&mut self, flags: &[bool]) -> Result<(), ClothError> {
-        let expected = self.collisions.pulling().len();
+        let expected = self.response.collisions().pulling().len();
         if flags.len() != expected {
             return Err(ClothError::WrongLength {
                 what: "carried contacts",
@@ -505,7 +423,7 @@ impl Simulator {
                 expected,
             });
         }
-        self.collisions.set_pulling(flags);
+        self.response.collisions_mut().set_pulling(flags);
         Ok(())
     }
 
@@ -524,10 +442,9 @@ impl Simulator {
         t1: f64,
         end: &[Point],
     ) -> Result<(), ClothError> {
-        match &mut self.collisions.obstacle {
-            Some(obstacle) => obstacle.set_motion(t0, start, t1, end),
-            None => Err(ClothError::NoObstacle),
-        }
+        self.response
+            .collisions_mut()
+            .set_obstacle_motion(t0, start, t1, end)
     }
 
     fn check_state(&self, state: &State, dt: f64) -> Result<u32, ClothError> {
@@ -690,7 +607,7 @@ impl Simulator {
         }
         let (f, lag) = (&w.filter, h - w.base_step);
         for i in 0..w.x0.len() {
-            if f.s[i] != Mat3::identity() {
+            if !f.is_free(i) {
                 let held = w.x0[i] + f.z[i] * lag;
                 let toward = (Mat3::identity() - f.s[i]) * (held - w.base[i]);
                 w.base[i] += toward;
@@ -706,7 +623,7 @@ impl Simulator {
         }
     }
 
-    /// The second look at the body (step 1 of [`crate::collision`]): vertices the solve's
+    /// The second look at the body (step 1 of [`crate::response`]): vertices the solve's
     /// result `v + delta` takes into the body become contacts and the same linear system is
     /// solved again with them constrained, from the last solution, up to
     /// [`CONTACT_ROUNDS`] times. Without it a vertex the first look missed (released, or
@@ -724,12 +641,13 @@ impl Simulator {
             for (i, x) in w.x.iter_mut().enumerate() {
                 *x = w.base[i] + (w.v[i] + w.delta[i]) * w.base_step;
             }
-            let s = &w.filter.s;
-            let free = |i: usize| s[i] == Mat3::identity();
-            if self
-                .collisions
-                .missed_contacts(&self.settings, h, &w.x0, &w.x, free)
-                == 0
+            if self.response.collisions_mut().missed_contacts(
+                &self.settings,
+                h,
+                &w.x0,
+                &w.x,
+                &w.filter,
+            ) == 0
             {
                 break;
             }
@@ -753,7 +671,7 @@ impl Simulator {
             &w.x0,
             t1,
             h,
-            &self.collisions.contacts,
+            self.response.collisions().contacts(),
             &mut w.filter,
         );
     }
@@ -799,7 +717,8 @@ impl Simulator {
         let w = &mut self.work;
         w.x0.copy_from_slice(&state.positions);
         w.v0.copy_from_slice(&state.velocities);
-        self.collisions
+        self.response
+            .collisions_mut()
             .before_solve(&self.settings, state.time, h, &w.x0, &w.v0)?;
         self.prepare_filter(t1, h);
         self.prepare_base(h, state.previous.as_ref());
@@ -845,8 +764,8 @@ impl Simulator {
                 }
                 // The last iteration's end needs only Φ, not another matrix.
                 let next = self.evaluate(!last);
-                let enough = next <= at - 1e-4 * alpha * slope;
-                if !self.settings.line_search || enough || alpha < 1e-3 || !next.is_finite() {
+                let enough = next <= at - ARMIJO * alpha * slope;
+                if !self.settings.line_search || enough || alpha < MIN_STEP || !next.is_finite() {
                     at = next;
                     break;
                 }
@@ -870,71 +789,25 @@ impl Simulator {
         if !finite {
             return Err(StepFailure::NonFinite.into());
         }
-        // Friction first, as a force of the integrator's own step (its impulses are the
-        // solve's, and positions follow as x = x̂ + ĥ v): strain limiting and the collision
-        // passes have the last word.
-        let mut motion = Substep {
+        let integrator = Substep {
             h: w.base_step,
             x0: &w.base,
             x: &mut w.x,
             v: &mut w.trial,
             inverse_mass: &w.inverse_mass,
         };
-        self.collisions
-            .friction(&self.settings, &w.impulse, &mut motion);
-        // The other passes see the straight path from x₀ to x and its velocity
-        // u = (x − x₀) / h (backward Euler's own): w.v keeps u, w.delta what the integrator's
-        // end velocity adds to it, v − u.
-        for i in 0..w.x.len() {
-            let average = (w.x[i] - w.x0[i]) / h;
-            w.delta[i] = w.trial[i] - average;
-            w.trial[i] = average;
-            w.v[i] = average;
-        }
-        let mut motion = Substep {
-            h,
-            x0: &w.x0,
-            x: &mut w.x,
-            v: &mut w.trial,
-            inverse_mass: &w.inverse_mass,
-        };
-        let limit = self.settings.strain_limit;
-        if limit > 0.0 {
-            self.collisions
-                .floors(&self.settings, h, &w.x0, &mut w.floors);
-            report.strain_corrections +=
-                self.strain_limiter
-                    .limit(&self.model.springs, limit, &mut motion, &w.floors);
-        }
-        let repelled = self.collisions.repel(&self.settings, &mut motion)?;
-        // Collision impulses stop features approaching at once, which strains the edges
-        // around them: limit again after them, the cloth around taking up the slack.
-        let (limiter, springs) = (&mut self.strain_limiter, &self.model.springs);
-        let floors = &w.floors;
-        let mut relax = |m: &mut Substep, moved: &[bool]| {
-            if limit > 0.0 && moved.contains(&true) {
-                report.strain_corrections += limiter.limit_around(springs, limit, m, floors, moved);
-            }
-        };
-        relax(&mut motion, repelled);
-        let impacts = self
-            .collisions
-            .resolve(&self.settings, &mut motion, &mut relax)?;
-        // A vertex the passes left alone ends with the integrator's velocity; one they
-        // changed (stopped by an impact, pushed, limited) with the velocity of its corrected
-        // path, as backward Euler's would: the impulse that changed its path also took the
-        // acceleration the path no longer has.
-        for ((v, excess), average) in w.trial.iter_mut().zip(&w.delta).zip(&w.v) {
-            if v == average {
-                *v += excess;
-            }
-        }
+        let springs = &self.model.springs;
+        let impacts =
+            self.response
+                .after_solve(&self.settings, springs, integrator, &w.x0, h, &w.impulse);
+        report.strain_corrections += self.response.take_strain_corrections();
+        let impacts = impacts?;
         state.remember(h);
         state.positions.copy_from_slice(&w.x);
         state.velocities.copy_from_slice(&w.trial);
         state.time = t1;
         report.substeps += 1;
-        report.contacts = self.collisions.contacts.len() as u32;
+        report.contacts = self.response.collisions().contacts().len() as u32;
         report.impacts += impacts;
         Ok(())
     }

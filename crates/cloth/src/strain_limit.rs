@@ -24,11 +24,8 @@
 //! collision pass, [`StrainLimiter::limit_around`] runs the same sweeps with the vertices the
 //! pass moved a hundred times heavier, so the cloth around them takes up the strain.
 
-use tailor_subdiv::Point;
-
-use crate::collision::Motion as Substep;
-use crate::energy::Vec3;
 use crate::model::Springs;
+use crate::substep::{Floor, HELD_MASS, Substep};
 
 /// Most Gauss–Seidel sweeps over the edges per substep (the impact of the 128² drape on the
 /// sphere takes about 120; 64 left it 12% strained).
@@ -37,9 +34,6 @@ pub const SWEEPS: usize = 256;
 /// An edge past the limit is brought this fraction of the limit inside it, so that the
 /// corrections of its neighbours do not push it straight back out.
 const SLACK: f64 = 0.05;
-
-/// How much heavier a vertex a collision pass moved is in [`StrainLimiter::limit_around`].
-const MOVED_MASS: f64 = 100.0;
 
 /// No source reaches this vertex through edges.
 const UNREACHED: u32 = u32::MAX;
@@ -238,7 +232,7 @@ impl StrainLimiter {
         corrections
     }
 
-    /// [`Self::limit`] after a collision pass: the vertices `moved` flags count [`MOVED_MASS`]
+    /// [`Self::limit`] after a collision pass: the vertices `moved` flags count [`HELD_MASS`]
     /// times heavier and the first sweep goes outwards from them as from fixed vertices, so
     /// the cloth around them takes up the strain the pass left, in few sweeps, rather than
     /// undoing what it did.
@@ -256,7 +250,7 @@ impl StrainLimiter {
             m.inverse_mass
                 .iter()
                 .zip(moved)
-                .map(|(&w, &moved)| if moved { w / MOVED_MASS } else { w }),
+                .map(|(&w, &moved)| if moved { w / HELD_MASS } else { w }),
         );
         let corrections = self.sweep(
             springs,
@@ -270,42 +264,12 @@ impl StrainLimiter {
     }
 }
 
-/// A half-space a vertex's corrections must not leave: n · x ≥ offset for a unit normal n
-/// pointing away from the body (a floor a little above the body's surface at the end of the
-/// substep), or none.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Floor {
-    pub normal: Vec3,
-    pub offset: f64,
-}
-
-impl Floor {
-    /// No floor.
-    pub const NONE: Self = Self {
-        normal: Vec3::new(0.0, 0.0, 0.0),
-        offset: f64::NEG_INFINITY,
-    };
-
-    /// The correction `delta` of a vertex at `x`, shortened along the normal where it would
-    /// take the vertex below the floor: a vertex near the body slides along it or stops at
-    /// the floor, never pushed into the body for the projection after to push back.
-    fn clamp(&self, x: Point, delta: Vec3) -> Vec3 {
-        let inward = delta.dot(&self.normal);
-        if inward >= 0.0 {
-            return delta;
-        }
-        let room = (self.normal.dot(&x.coords) - self.offset).max(0.0);
-        if inward < -room {
-            delta - self.normal * (inward + room)
-        } else {
-            delta
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use tailor_subdiv::Point;
+
     use super::*;
+    use crate::energy::Vec3;
 
     /// Runs the limiter at 10% on a substep of 0.01 s ending at `x` with zero velocities,
     /// with `floors` (none if empty), after a collision pass that `moved` the

@@ -1,60 +1,14 @@
-//! Collision response: the garment against an animated obstacle (the body) and against itself,
-//! after Bridson, Fedkiw & Anderson, "Robust treatment of collisions, contact and friction for
-//! cloth animation" (SIGGRAPH 2002), with contact handled inside the implicit solve as Baraff &
-//! Witkin do ("Large Steps in Cloth Simulation", 1998, §5.3).
+//! Collision detection and its passes: the garment against an animated obstacle (the body)
+//! and against itself, after Bridson, Fedkiw & Anderson, "Robust treatment of collisions,
+//! contact and friction for cloth animation" (SIGGRAPH 2002), with contact handled inside the
+//! implicit solve as Baraff & Witkin do ("Large Steps in Cloth Simulation", 1998, §5.3).
 //!
-//! Every substep of length h, around the implicit solve:
-//!
-//! 1. **Body contacts, before the solve** ([`Obstacle::find_contacts`]). Each cloth vertex whose
-//!    closest body point is near enough that, moving on, it would end the substep closer than
-//!    the thickness becomes a contact constraint of the filter ([`crate::constraint`]): the
-//!    plane through the closest point, its normal velocity prescribed to the body's (or to an
-//!    approach that ends exactly at the thickness), the tangential velocity free. A vertex whose
-//!    contact pulled it towards the body in the last substep is released (Baraff & Witkin's
-//!    release rule). **A second look after the solve** ([`Collisions::missed_contacts`]): a
-//!    free vertex the solution takes closer than half the thickness to its start's body plane
-//!    (released, or pulled in by the cloth faster than its own velocity foretold) becomes a
-//!    contact too, and the simulator solves the same system again from the last solution.
-//!    Without it the projection of step 5 put such vertices back by up to a centimetre at
-//!    two substeps a frame, straining the edges around them by 15–35%.
-//! 2. **Friction, after the solve** ([`Collisions::friction`]). The constraint impulse j is
-//!    what the linear solve's residual leaves on a contact vertex, b − A Δv (the right-hand
-//!    side the constraint filter kept the solve from meeting there); Coulomb friction
-//!    removes up to μ jₙ / m of the tangential velocity relative to the body (Bridson et al.
-//!    §7.2). The simulator then limits strain (`crate::strain_limit`), so friction cannot hold
-//!    an edge stretched; vertices near the body are kept above a floor at three quarters of
-//!    the thickness ([`Collisions::floors`]), so the limiter does not push them in for the
-//!    projection to push back out.
-//! 3. **Self repulsion** ([`Collisions::repel`]): for every vertex within the thickness of a
-//!    face of the garment, an impulse that stops the pair approaching and starts separating it
-//!    by a tenth of the overlap per step (Bridson et al. §7.1), except the pairs the rest shape
-//!    itself puts that near (see the `self_collision` module). Stopping an
-//!    approach at once strains the edges around the pair, so strain limiting runs again with
-//!    the vertices it moved a hundred times heavier: the cloth around them takes up the slack.
-//! 4. **Self impacts, the fail-safe** ([`self_collision::resolve_impacts`]): continuous
-//!    vertex–triangle and edge–edge tests over the straight-line motion; each impact gets an
-//!    inelastic impulse at the time of contact, each round of impulses is followed by strain
-//!    limiting around them as in step 3 (the next round's query sees whether that crossed
-//!    anything); a few rounds, then the remaining colliding vertices are merged into impact
-//!    zones that move together (Bridson et al. §7.4, with zones that translate rather than
-//!    rotate), which the collision-free start guarantees collision-free. Without the
-//!    limiting in steps 3 and 4 the 64² drape's pleats ended 37% strained.
-//! 5. **Body impacts and the final projection** ([`Obstacle::resolve_impacts`],
-//!    [`Obstacle::project`]): any vertex whose path enters a body triangle from the front is put
-//!    back on that triangle's front at the end of the substep, however fast the body moved,
-//!    and any vertex closer than half the thickness is pushed out to it.
-//! 6. **The refined surface** ([`surface`]), when the caller gave its stencils: the control
-//!    points are lifted until every point of the subdivided surface, the one that renders,
-//!    is at least the thickness from the body. A lift strains the edges around the lifted
-//!    points as a push does (the demo's cape went from 5% to 11% strain in one substep), so
-//!    strain limiting relaxes around every vertex steps 5 and 6 moved, and steps 5's
-//!    projection and 6 run once more after it.
-//! 7. **Self impacts again** (`Collisions::recheck_layers`), with self-collision on and
-//!    when step 5 pushed anything: a push can fold a layer lying on the body through the one
-//!    above it (the fold scenario's lower layer: two of its faces crossed after a push
-//!    under two of three 1% changes of the CG tolerance), so step 4 runs again on the
-//!    positions steps 5 and 6 left, the vertices they moved a hundred times heavier, and the
-//!    projection once more for what that moved.
+//! [`Collisions`] keeps the state they share from substep to substep: the garment's hierarchy,
+//! the obstacle ([`obstacle`]) and the refined surface that must clear it ([`surface`]), the
+//! body contacts of the substep, the vertices whose contact pulled, and the self-collision
+//! queries' buffers ([`self_collision`]). Each pass is one method; [`crate::response`] runs
+//! them in the order its docs number, which the passes' docs refer to, with strain limiting
+//! between them.
 //!
 //! The body is one-sided: its faces' counter-clockwise normals point outwards (a closed
 //! character), so a vertex behind a face is inside and is pushed to the front. Impulses are
@@ -65,120 +19,32 @@ mod obstacle;
 mod self_collision;
 mod surface;
 
-pub(crate) use obstacle::Obstacle;
-pub(crate) use surface::Surface;
+use obstacle::Obstacle;
+use surface::Surface;
 
 use tailor_collide::{CollideError, Hierarchy};
-use tailor_subdiv::Point;
+use tailor_subdiv::{Point, StencilTable};
 
-use crate::constraint::Contact;
+use crate::constraint::{Contact, Filter};
 use crate::energy::Vec3;
-use crate::strain_limit::Floor;
-use crate::{ClothError, Model, Settings};
-
-/// How much heavier a vertex resting on the body is in the self-collision passes.
-const HELD_MASS: f64 = 100.0;
+use crate::settings::Settings;
+use crate::substep::{Floor, Substep};
+use crate::{ClothError, Model};
 
 /// The collision state of one simulator: the garment's hierarchy, the obstacle, and the
 /// buffers of the current substep.
 #[derive(Clone, Debug)]
 pub(crate) struct Collisions {
-    pub obstacle: Option<Obstacle>,
+    obstacle: Option<Obstacle>,
     /// The refined surface that must clear the obstacle, when the caller gave one.
-    pub surface: Option<Surface>,
+    surface: Option<Surface>,
     cloth: Hierarchy,
     /// The body contacts of the current substep.
-    pub contacts: Vec<Contact>,
+    contacts: Vec<Contact>,
     /// Vertices whose contact pulled them towards the body in the last substep.
     pulling: Vec<bool>,
-    /// The inverse masses of the self-collision passes: zero for vertices held by the body.
-    held: Vec<f64>,
     /// The self-collision queries' answers, reused.
     layers: self_collision::Buffers,
-    /// The vertices the last repulsion or body push moved.
-    moved: Vec<bool>,
-    /// End positions before the body passes.
-    before: Vec<Point>,
-    /// The velocities of [`Self::recheck_layers`]: the substep's own, and those that reach
-    /// the positions the body passes left.
-    own_velocity: Vec<Vec3>,
-    reaching: Vec<Vec3>,
-}
-
-/// Marks in `moved` the vertices the body passes moved from `before`, relaxes strain around
-/// them, and pushes out whatever that brought back within half the thickness; returns how
-/// many the projection moved.
-fn relax_what_moved(
-    obstacle: &mut Obstacle,
-    before: &[Point],
-    moved: &mut Vec<bool>,
-    thickness: f64,
-    motion: &mut Motion,
-    relax: &mut impl FnMut(&mut Motion, &[bool]),
-) -> Result<u32, CollideError> {
-    moved.clear();
-    moved.extend(before.iter().zip(motion.x.iter()).map(|(a, b)| a != b));
-    relax(motion, moved);
-    obstacle.project(thickness, motion)
-}
-
-/// The moving garment of one substep: start positions, and end positions and velocities the
-/// response changes.
-pub(crate) struct Motion<'a> {
-    pub h: f64,
-    pub x0: &'a [Point],
-    pub x: &'a mut [Point],
-    pub v: &'a mut [Vec3],
-    pub inverse_mass: &'a [f64],
-}
-
-impl Motion<'_> {
-    /// The same motion with other inverse masses.
-    pub fn weighted<'b>(&'b mut self, inverse_mass: &'b [f64]) -> Motion<'b> {
-        Motion {
-            h: self.h,
-            x0: self.x0,
-            x: &mut *self.x,
-            v: &mut *self.v,
-            inverse_mass,
-        }
-    }
-
-    /// Positions again from velocities, x = x₀ + h v, for every movable vertex.
-    fn sync_positions(&mut self) {
-        for (i, x) in self.x.iter_mut().enumerate() {
-            if self.inverse_mass[i] > 0.0 {
-                *x = self.x0[i] + self.v[i] * self.h;
-            }
-        }
-    }
-
-    /// Applies the impulse along unit `normal` that brings the relative normal velocity
-    /// Σ αₖ vₖ · n of `vertices` up to `target`, if it is below; each vertex's share is
-    /// αₖ / mₖ. Returns whether it changed anything.
-    fn push_apart(
-        &mut self,
-        vertices: [u32; 4],
-        alpha: [f64; 4],
-        normal: Vec3,
-        target: f64,
-    ) -> bool {
-        let mut relative = 0.0;
-        let mut weight = 0.0;
-        for (&k, &a) in vertices.iter().zip(&alpha) {
-            relative += a * self.v[k as usize].dot(&normal);
-            weight += a * a * self.inverse_mass[k as usize];
-        }
-        if relative >= target || weight <= 0.0 {
-            return false;
-        }
-        let impulse = (target - relative) / weight;
-        for (&k, &a) in vertices.iter().zip(&alpha) {
-            let k = k as usize;
-            self.v[k] += normal * (a * impulse * self.inverse_mass[k]);
-        }
-        true
-    }
 }
 
 impl Collisions {
@@ -198,13 +64,49 @@ impl Collisions {
             cloth,
             contacts: Vec::new(),
             pulling: vec![false; n],
-            held: Vec::with_capacity(n),
             layers,
-            moved: vec![false; n],
-            before: Vec::with_capacity(n),
-            own_velocity: Vec::with_capacity(n),
-            reaching: Vec::with_capacity(n),
         })
+    }
+
+    /// Makes the polygon mesh with CSR faces `face_offsets`/`face_vertices`, resting at
+    /// `positions`, the obstacle (see [`Obstacle::new`]), replacing any earlier one.
+    pub fn set_obstacle(
+        &mut self,
+        positions: &[Point],
+        face_offsets: &[u32],
+        face_vertices: &[u32],
+    ) -> Result<(), ClothError> {
+        self.obstacle = Some(Obstacle::new(positions, face_offsets, face_vertices)?);
+        Ok(())
+    }
+
+    /// Moves the obstacle for the next frame (see [`Obstacle::set_motion`]).
+    pub fn set_obstacle_motion(
+        &mut self,
+        t0: f64,
+        start: &[Point],
+        t1: f64,
+        end: &[Point],
+    ) -> Result<(), ClothError> {
+        match &mut self.obstacle {
+            Some(obstacle) => obstacle.set_motion(t0, start, t1, end),
+            None => Err(ClothError::NoObstacle),
+        }
+    }
+
+    /// Makes the refined surface `stencils` evaluates the one that must clear the obstacle.
+    pub fn set_surface(&mut self, stencils: StencilTable) {
+        self.surface = Some(Surface::new(stencils));
+    }
+
+    /// Whether there is an obstacle.
+    pub fn has_obstacle(&self) -> bool {
+        self.obstacle.is_some()
+    }
+
+    /// The body contacts of the current substep, constraints of its solve.
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
     }
 
     /// Vertices whose contact pulled them towards the body in the last substep.
@@ -235,7 +137,7 @@ impl Collisions {
     }
 
     /// Adds to [`Self::contacts`] the body contacts the solve missed (see
-    /// [`Obstacle::missed_contacts`]) for vertices `free` says are unconstrained, given the
+    /// [`Obstacle::missed_contacts`]) for the vertices `filter` leaves free, given the
     /// solve's end positions `x`; returns how many.
     pub fn missed_contacts(
         &mut self,
@@ -243,10 +145,10 @@ impl Collisions {
         h: f64,
         x0: &[Point],
         x: &[Point],
-        free: impl Fn(usize) -> bool,
+        filter: &Filter,
     ) -> usize {
         self.obstacle.as_ref().map_or(0, |obstacle| {
-            obstacle.missed_contacts(settings.thickness, h, x0, x, free, &mut self.contacts)
+            obstacle.missed_contacts(settings.thickness, h, x0, x, filter, &mut self.contacts)
         })
     }
 
@@ -259,9 +161,9 @@ impl Collisions {
         }
     }
 
-    /// Coulomb friction on the body contacts (step 2 of the module docs); `residual` is the
+    /// Coulomb friction on the body contacts (step 2 of [`crate::response`]); `residual` is the
     /// linear solve's b − A Δv, M (v₀ − v) + h f at the end of the solve linearized.
-    pub fn friction(&mut self, settings: &Settings, residual: &[Vec3], motion: &mut Motion) {
+    pub fn friction(&mut self, settings: &Settings, residual: &[Vec3], motion: &mut Substep) {
         if self.obstacle.is_some() {
             obstacle::friction(
                 &self.contacts,
@@ -273,145 +175,71 @@ impl Collisions {
         }
     }
 
-    /// The inverse masses of the self-collision passes: cloth resting on the body is held by
-    /// it, [`HELD_MASS`] times heavier, so the layers above give way instead and the self
-    /// passes do not push it into the body for the body passes to push back out through the
-    /// layer above.
-    fn hold(&mut self, inverse_mass: &[f64]) {
-        self.held.clear();
-        self.held.extend_from_slice(inverse_mass);
-        for c in &self.contacts {
-            self.held[c.vertex as usize] /= HELD_MASS;
-        }
-    }
-
-    /// Self repulsion (step 3 of the module docs), when self-collision is on; returns the
-    /// vertices whose velocities it changed (all false when off).
+    /// Self repulsion (step 3 of [`crate::response`]) on `motion`; `moved` flags the vertices
+    /// whose velocities it changed.
     pub fn repel(
         &mut self,
-        settings: &Settings,
-        motion: &mut Motion,
-    ) -> Result<&[bool], CollideError> {
-        self.moved.resize(motion.x.len(), false);
-        if settings.self_collision {
-            self.hold(motion.inverse_mass);
-            let mut layers = motion.weighted(&self.held);
-            self_collision::repel(
-                &mut self.cloth,
-                settings.thickness,
-                &mut layers,
-                &mut self.layers,
-                &mut self.moved,
-            )?;
-        } else {
-            self.moved.fill(false);
-        }
-        Ok(&self.moved)
+        thickness: f64,
+        motion: &mut Substep,
+        moved: &mut [bool],
+    ) -> Result<(), CollideError> {
+        self_collision::repel(&mut self.cloth, thickness, motion, &mut self.layers, moved)
     }
 
-    /// The passes after repulsion (steps 4–7 of the module docs) on the end positions and
-    /// velocities, `relax` after each round of self impulses (see
-    /// [`self_collision::resolve_impacts`]). Returns how many impacts and projections they
-    /// made.
-    pub fn resolve(
-        &mut self,
-        settings: &Settings,
-        motion: &mut Motion,
-        relax: &mut impl FnMut(&mut Motion, &[bool]),
-    ) -> Result<u32, CollideError> {
-        let thickness = settings.thickness;
-        let mut resolved = 0;
-        if settings.self_collision {
-            resolved += self.layer_impacts(thickness, motion, relax, false)?;
-        }
-        if let Some(obstacle) = &mut self.obstacle {
-            self.before.clear();
-            self.before.extend_from_slice(motion.x);
-            let pushed = obstacle.resolve_impacts(&mut self.cloth, thickness, motion)?
-                + obstacle.project(thickness, motion)?;
-            let (before, moved) = (&self.before, &mut self.moved);
-            if pushed > 0 {
-                // The pushes strain the edges around the pushed vertices.
-                resolved += relax_what_moved(obstacle, before, moved, thickness, motion, relax)?;
-            }
-            resolved += pushed;
-            if let Some(surface) = &mut self.surface {
-                let lifted = obstacle.clear_surface(surface, thickness, motion)?;
-                if lifted > 0 {
-                    // Lifting control points strains the edges around them as much as a push
-                    // (the cape's edges went from 5% to 11% in one substep); lift again after,
-                    // so the collision passes keep the last word.
-                    resolved +=
-                        relax_what_moved(obstacle, before, moved, thickness, motion, relax)?;
-                    resolved += obstacle.clear_surface(surface, thickness, motion)?;
-                }
-                resolved += lifted;
-            }
-            if settings.self_collision && pushed > 0 {
-                resolved += self.recheck_layers(thickness, motion, relax)?;
-                if let Some(obstacle) = &mut self.obstacle {
-                    resolved += obstacle.project(thickness, motion)?;
-                }
-            }
-        }
-        Ok(resolved)
-    }
-
-    /// The continuous self impacts (step 4), with the body's contact vertices [`HELD_MASS`]
-    /// times heavier, and with `pushed_heavier` the vertices the body passes moved too.
-    fn layer_impacts(
+    /// One round of self-impact impulses (step 4 of [`crate::response`], see
+    /// [`self_collision::impulse_round`]): `None` when there was no impact, else how many it
+    /// handled and the vertices it changed.
+    pub fn impulse_round(
         &mut self,
         thickness: f64,
-        motion: &mut Motion,
-        relax: &mut impl FnMut(&mut Motion, &[bool]),
-        pushed_heavier: bool,
-    ) -> Result<u32, CollideError> {
-        self.hold(motion.inverse_mass);
-        if pushed_heavier {
-            for (held, &pushed) in self.held.iter_mut().zip(&self.moved) {
-                if pushed {
-                    *held /= HELD_MASS;
-                }
-            }
-        }
-        let mut layers = motion.weighted(&self.held);
-        self_collision::resolve_impacts(
-            &mut self.cloth,
-            thickness,
-            &mut layers,
-            &mut self.layers,
-            relax,
-        )
+        motion: &mut Substep,
+    ) -> Result<Option<(u32, &[bool])>, CollideError> {
+        self_collision::impulse_round(&mut self.cloth, thickness, motion, &mut self.layers)
     }
 
-    /// The self impacts again after the body passes: a push can fold a layer lying on the
-    /// body through the one above it. The self pass changes velocities and puts positions
-    /// at x₀ + h v, so for it each vertex takes the velocity that reaches the position the
-    /// body passes left, (x − x₀)/h, and keeps its own plus what the pass changed; the
-    /// vertices the body passes moved (pushed or lifted) count [`HELD_MASS`] times heavier.
-    fn recheck_layers(
+    /// The impact zones that end step 4 of [`crate::response`] (see
+    /// [`self_collision::impact_zones`]); returns how many merges they made.
+    pub fn impact_zones(&mut self, motion: &mut Substep) -> Result<u32, CollideError> {
+        self_collision::impact_zones(&mut self.cloth, motion, &mut self.layers)
+    }
+
+    /// Body impacts, then the projection (step 5 of [`crate::response`]); returns how many
+    /// vertices they moved, none without an obstacle.
+    pub fn push_out(&mut self, thickness: f64, motion: &mut Substep) -> Result<u32, CollideError> {
+        match &mut self.obstacle {
+            Some(obstacle) => Ok(
+                obstacle.resolve_impacts(&mut self.cloth, thickness, motion)?
+                    + obstacle.project(thickness, motion)?,
+            ),
+            None => Ok(0),
+        }
+    }
+
+    /// The projection alone (see [`Obstacle::project`]).
+    pub fn project(&mut self, thickness: f64, motion: &mut Substep) -> Result<u32, CollideError> {
+        self.obstacle
+            .as_mut()
+            .map_or(Ok(0), |obstacle| obstacle.project(thickness, motion))
+    }
+
+    /// The lift of the refined surface (step 6 of [`crate::response`]), when there is an
+    /// obstacle and a surface: the garment is lifted until the surface clears the body by
+    /// `thickness` at the substep's end ([`surface`]); call after [`Self::project`] or
+    /// [`Self::push_out`], which refit the body's hierarchy there. Returns how many
+    /// control-point moves it made.
+    pub fn clear_surface(
         &mut self,
         thickness: f64,
-        motion: &mut Motion,
-        relax: &mut impl FnMut(&mut Motion, &[bool]),
+        motion: &mut Substep,
     ) -> Result<u32, CollideError> {
-        let h = motion.h;
-        self.own_velocity.clear();
-        self.own_velocity.extend_from_slice(motion.v);
-        for ((v, x), x0) in motion.v.iter_mut().zip(motion.x.iter()).zip(motion.x0) {
-            *v = (x - x0) / h;
+        match (&self.obstacle, &mut self.surface) {
+            (Some(obstacle), Some(surface)) => surface.clear(
+                obstacle.hierarchy(),
+                |c| obstacle.velocity_at(c),
+                thickness,
+                motion,
+            ),
+            _ => Ok(0),
         }
-        self.reaching.clear();
-        self.reaching.extend_from_slice(motion.v);
-        let resolved = self.layer_impacts(thickness, motion, relax, true)?;
-        for ((v, own), reaching) in motion
-            .v
-            .iter_mut()
-            .zip(&self.own_velocity)
-            .zip(&self.reaching)
-        {
-            *v = own + (*v - reaching);
-        }
-        Ok(resolved)
     }
 }

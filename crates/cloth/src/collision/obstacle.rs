@@ -1,6 +1,6 @@
 //! The obstacle: a polygon mesh of fixed topology (the body) whose positions the caller gives at
 //! the start and end of each frame; substeps interpolate linearly between them, so every body
-//! vertex moves with the constant velocity (end − start) / (t₁ − t₀) (see [`crate::collision`]
+//! vertex moves with the constant velocity (end − start) / (t₁ − t₀) (see [`crate::response`]
 //! for where each pass sits in the step).
 //!
 //! Contacts and the final projection use the closest body point of each cloth vertex
@@ -14,12 +14,11 @@
 use tailor_collide::{Closest, CollideError, Hierarchy, VertexTriangleImpact};
 use tailor_subdiv::Point;
 
-use super::Motion;
-use super::surface::Surface;
-use crate::constraint::Contact;
+use crate::ClothError;
+use crate::constraint::{Contact, Filter};
 use crate::energy::Vec3;
-use crate::strain_limit::Floor;
-use crate::{ClothError, Settings};
+use crate::settings::Settings;
+use crate::substep::{Floor, Substep};
 
 /// Rounds of the continuous pass: each re-tests the paths the last one changed.
 const IMPACT_ROUNDS: usize = 4;
@@ -131,13 +130,13 @@ impl Obstacle {
     }
 
     /// The body's velocity at a closest point.
-    fn velocity_at(&self, c: &Closest) -> Vec3 {
+    pub fn velocity_at(&self, c: &Closest) -> Vec3 {
         (0..3)
             .map(|k| self.velocity[c.vertices[k] as usize] * c.barycentric[k])
             .sum()
     }
 
-    /// Contact constraints for the substep (step 1 of [`crate::collision`]): every vertex not
+    /// Contact constraints for the substep (step 1 of [`crate::response`]): every vertex not
     /// `pulling` that would end closer than the thickness if it kept its velocity plus
     /// gravity's pull. Looks as far as the fastest cloth vertex and body vertex can close in
     /// one substep.
@@ -171,8 +170,8 @@ impl Obstacle {
         Ok(())
     }
 
-    /// Contacts the solve missed (step 1's second look): each vertex `free` says is
-    /// unconstrained that ends the substep at `x` closer than half the thickness to the moving
+    /// Contacts the solve missed (step 1's second look): each vertex `filter` leaves free
+    /// that ends the substep at `x` closer than half the thickness to the moving
     /// plane of its start's closest body point (found by the last [`Self::find_contacts`])
     /// gets the contact that call would have given it, appended to `out`. Returns how many.
     pub fn missed_contacts(
@@ -181,13 +180,13 @@ impl Obstacle {
         h: f64,
         x0: &[Point],
         x: &[Point],
-        free: impl Fn(usize) -> bool,
+        filter: &Filter,
         out: &mut Vec<Contact>,
     ) -> usize {
         let before = out.len();
         for (i, c) in self.closest.iter().enumerate() {
             let Some(c) = c else { continue };
-            if !free(i) {
+            if !filter.is_free(i) {
                 continue;
             }
             let (normal, distance) = away_from(x0[i], c);
@@ -216,13 +215,13 @@ impl Obstacle {
     }
 
     /// Puts back on the front of a body face every vertex whose path over the substep enters
-    /// that face from the front (step 5 of [`crate::collision`]), at the thickness, with no
+    /// that face from the front (step 5 of [`crate::response`]), at the thickness, with no
     /// velocity into the face. Returns how many vertices it moved.
     pub fn resolve_impacts(
         &mut self,
         cloth: &mut Hierarchy,
         thickness: f64,
-        m: &mut Motion,
+        m: &mut Substep,
     ) -> Result<u32, CollideError> {
         let [start, end] = &self.substep;
         self.hierarchy.refit_swept(start, end, 0.0)?;
@@ -264,11 +263,7 @@ impl Obstacle {
                     continue;
                 }
                 m.x[i] = point(end) + normal * thickness;
-                let body = (point(end) - point(start)) / m.h;
-                let closing = (m.v[i] - body).dot(&normal);
-                if closing < 0.0 {
-                    m.v[i] -= normal * closing;
-                }
+                m.stop_approach(i, normal, (point(end) - point(start)) / m.h);
                 changed = true;
                 moved += 1;
             }
@@ -281,7 +276,7 @@ impl Obstacle {
 
     /// Pushes every vertex closer to the body than half the thickness (or behind a face) out
     /// to half the thickness, removing its velocity into the body. Returns how many it moved.
-    pub fn project(&mut self, thickness: f64, m: &mut Motion) -> Result<u32, CollideError> {
+    pub fn project(&mut self, thickness: f64, m: &mut Substep) -> Result<u32, CollideError> {
         self.hierarchy.refit(&self.substep[1], 0.0)?;
         let closest = self.hierarchy.closest_points(m.x, thickness)?;
         let floor = 0.5 * thickness;
@@ -293,25 +288,16 @@ impl Obstacle {
                 continue;
             }
             m.x[i] = c.point + normal * (floor * (1.0 + PROJECTION_SLACK));
-            let closing = (m.v[i] - self.velocity_at(c)).dot(&normal);
-            if closing < 0.0 {
-                m.v[i] -= normal * closing;
-            }
+            m.stop_approach(i, normal, self.velocity_at(c));
             moved += 1;
         }
         Ok(moved)
     }
 
-    /// Lifts the garment until its refined `surface` clears the body by `thickness` at the
-    /// substep's end ([`super::surface`]); call after [`Self::project`], which refits the
-    /// hierarchy there. Returns how many control-point moves it made.
-    pub fn clear_surface(
-        &self,
-        surface: &mut Surface,
-        thickness: f64,
-        m: &mut Motion,
-    ) -> Result<u32, CollideError> {
-        surface.clear(&self.hierarchy, |c| self.velocity_at(c), thickness, m)
+    /// The body's hierarchy, refit where the last [`Self::project`] left it: at the
+    /// substep's end.
+    pub fn hierarchy(&self) -> &Hierarchy {
+        &self.hierarchy
     }
 }
 
@@ -338,14 +324,14 @@ pub(super) fn away_from(q: Point, c: &Closest) -> (Vec3, f64) {
     }
 }
 
-/// Coulomb friction on the contact vertices (step 2 of [`crate::collision`]): the normal
+/// Coulomb friction on the contact vertices (step 2 of [`crate::response`]): the normal
 /// impulse jₙ = −residual · n the contact exerted may remove up to μ jₙ / m of the tangential
 /// velocity relative to the body. A contact that pulled (jₙ < 0) is marked in `pulling`.
 pub(super) fn friction(
     contacts: &[Contact],
     residual: &[Vec3],
     mu: f64,
-    m: &mut Motion,
+    m: &mut Substep,
     pulling: &mut [bool],
 ) {
     pulling.fill(false);
@@ -374,6 +360,7 @@ pub(super) fn friction(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::energy::Mat3;
     use crate::shapes::block;
 
     #[test]
@@ -401,8 +388,10 @@ mod tests {
         assert!(contacts.is_empty());
         // The solve ends vertex 0 at 1 cm, vertex 1 and 2 at 1 mm (pulled in by the cloth).
         let x = [0.01, 0.001, 0.001].map(|y| Point::new(0.0, y, 0.0));
+        let mut filter = Filter::new(3);
+        filter.s[2] = Mat3::zeros();
         let added =
-            obstacle.missed_contacts(settings.thickness, h, &x0, &x, |i| i != 2, &mut contacts);
+            obstacle.missed_contacts(settings.thickness, h, &x0, &x, &filter, &mut contacts);
         assert_eq!(added, 1);
         let c = &contacts[0];
         assert_eq!(c.vertex, 1);

@@ -6,7 +6,7 @@
 //! on the four vertices of a vertex–triangle pair (weights 1, −w₀, −w₁, −w₂ with w the
 //! barycentric coordinates) or an edge–edge pair (1 − s, s, −(1 − u), −u), each moving by its
 //! weight over its mass, which changes the relative velocity of the two contact points by the
-//! impulse times Σ αₖ² / mₖ ([`Motion::push_apart`]). The normal-cone culling of the collide
+//! impulse times Σ αₖ² / mₖ ([`Substep::push_apart`]). The normal-cone culling of the collide
 //! crate keeps both queries cheap where the cloth is smooth.
 //!
 //! **What repulsion leaves alone.** A mesh with edges shorter than the thickness has, in its
@@ -47,12 +47,8 @@
 use tailor_collide::{CollideError, Hierarchy, Impacts, LocalFaces, Neighbours};
 use tailor_subdiv::Point;
 
-use super::Motion;
 use crate::energy::Vec3;
-
-/// Rounds of impulses before impact zones take over (rigid zones strain the cloth around
-/// them: with 6 rounds the 64² drape needed zones in its pleats and ended 13% strained).
-const IMPULSE_ROUNDS: usize = 12;
+use crate::substep::Substep;
 
 /// Rounds of impact-zone merging before giving up (each merges at least two zones).
 const ZONE_ROUNDS: usize = 64;
@@ -99,7 +95,7 @@ impl Buffers {
 pub(super) fn repel(
     cloth: &mut Hierarchy,
     thickness: f64,
-    m: &mut Motion,
+    m: &mut Substep,
     buffers: &mut Buffers,
     moved: &mut [bool],
 ) -> Result<(), CollideError> {
@@ -186,7 +182,7 @@ impl Pair {
 
     /// The contact normal at the time of impact, pointing the way the first feature was
     /// relative to the second at the start; `None` when it is undefined.
-    fn normal(&self, m: &Motion) -> Option<Vec3> {
+    fn normal(&self, m: &Substep) -> Option<Vec3> {
         let at = |k: u32| {
             let k = k as usize;
             m.x0[k] + (m.x[k] - m.x0[k]) * self.time
@@ -204,57 +200,56 @@ impl Pair {
     }
 }
 
-/// Continuous self-collision: impulses at the impacts for a few rounds, each followed by
-/// `relax` (strain limiting, the vertices it flags heavier: an impulse stops two features
-/// approaching at once, which strains the edges around them; the next round's query checks
-/// that relaxing crossed nothing), then impact zones. Returns how many impacts it handled.
-pub(super) fn resolve_impacts(
+/// One round of continuous self-collision: an impulse at every impact of the straight-line
+/// motion, then positions again from velocities. `None` when there was no impact; else how
+/// many impacts it handled and the vertices whose velocities it changed. A round stops two
+/// features approaching at once, which strains the edges around them: the response relaxes
+/// strain around the changed vertices before the next round, whose query checks that
+/// relaxing crossed nothing, and after a few rounds leaves the rest to [`impact_zones`].
+pub(super) fn impulse_round<'a>(
     cloth: &mut Hierarchy,
     thickness: f64,
-    m: &mut Motion,
-    buffers: &mut Buffers,
-    relax: &mut impl FnMut(&mut Motion, &[bool]),
-) -> Result<u32, CollideError> {
+    m: &mut Substep,
+    buffers: &'a mut Buffers,
+) -> Result<Option<(u32, &'a [bool])>, CollideError> {
     let Buffers {
         impacts, touched, ..
     } = buffers;
     touched.resize(m.v.len(), false);
-    let mut handled = 0;
-    for _ in 0..IMPULSE_ROUNDS {
-        cloth.refit_swept(m.x0, m.x, 0.0)?;
-        cloth.self_impacts_into(impacts);
-        if impacts.vertex_triangle.is_empty() && impacts.edge_edge.is_empty() {
-            return Ok(handled);
-        }
-        touched.fill(false);
-        for pair in Pair::list(cloth, impacts) {
-            let Some(normal) = pair.normal(m) else {
-                continue;
-            };
-            let gap = pair.combine(|k| m.x0[k].coords).dot(&normal);
-            let target = (SEPARATION * thickness - gap) / m.h;
-            if m.push_apart(pair.vertices, pair.alpha, normal, target) {
-                for &k in &pair.vertices {
-                    touched[k as usize] = true;
-                }
-            }
-            handled += 1;
-        }
-        m.sync_positions();
-        relax(m, touched);
+    cloth.refit_swept(m.x0, m.x, 0.0)?;
+    cloth.self_impacts_into(impacts);
+    if impacts.vertex_triangle.is_empty() && impacts.edge_edge.is_empty() {
+        return Ok(None);
     }
-    Ok(handled + impact_zones(cloth, m, impacts)?)
+    touched.fill(false);
+    let mut handled = 0;
+    for pair in Pair::list(cloth, impacts) {
+        let Some(normal) = pair.normal(m) else {
+            continue;
+        };
+        let gap = pair.combine(|k| m.x0[k].coords).dot(&normal);
+        let target = (SEPARATION * thickness - gap) / m.h;
+        if m.push_apart(pair.vertices, pair.alpha, normal, target) {
+            for &k in &pair.vertices {
+                touched[k as usize] = true;
+            }
+        }
+        handled += 1;
+    }
+    m.sync_positions();
+    Ok(Some((handled, touched)))
 }
 
 /// Merges the vertices of every remaining impact into zones that move with their mean
 /// velocity (momentum kept), or with the mean velocity of the vertices in them whose motion
 /// is prescribed (pins, attachments), until no impact is left. A zone translates rigidly, so
 /// two of its features cannot meet during the substep if they did not touch at its start.
-fn impact_zones(
+pub(super) fn impact_zones(
     cloth: &mut Hierarchy,
-    m: &mut Motion,
-    impacts: &mut Impacts,
+    m: &mut Substep,
+    buffers: &mut Buffers,
 ) -> Result<u32, CollideError> {
+    let impacts = &mut buffers.impacts;
     let n = m.v.len();
     let mut parent: Vec<u32> = (0..n as u32).collect();
     let root = |parent: &mut Vec<u32>, mut k: u32| {

@@ -21,9 +21,9 @@
 use tailor_collide::{CollideError, Hierarchy};
 use tailor_subdiv::{Point, StencilTable};
 
-use super::Motion;
 use super::obstacle::away_from;
 use crate::energy::Vec3;
+use crate::substep::Substep;
 
 /// Most rounds of measure-and-lift per substep; the pass stops at the first round that finds
 /// nothing to lift. Overlapping requests settle geometrically (each round lifts a control
@@ -67,7 +67,7 @@ impl Surface {
         body: &Hierarchy,
         velocity_at: impl Fn(&tailor_collide::Closest) -> Vec3,
         thickness: f64,
-        m: &mut Motion,
+        m: &mut Substep,
     ) -> Result<u32, CollideError> {
         let target = thickness * (1.0 + SLACK);
         let mut moved = 0;
@@ -119,10 +119,7 @@ impl Surface {
                     continue;
                 };
                 m.x[j] += lift;
-                let closing = (m.v[j] - self.body[j] / w).dot(&normal);
-                if closing < 0.0 {
-                    m.v[j] -= normal * closing;
-                }
+                m.stop_approach(j, normal, self.body[j] / w);
                 moved += 1;
             }
         }
