@@ -22,7 +22,7 @@ pub enum Integrator {
 
 /// How the simulator steps. The defaults are the library's (backward Euler at two substeps a
 /// frame at 24 fps, no self-collision); a `tailor` scene has its own (BDF2 at five,
-/// self-collision on), for the reasons the README's Decisions give.
+/// self-collision on), for the reasons `docs/DESIGN.md` gives.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
     /// Longest substep, seconds (default 1/48: 2 substeps per frame at 24 fps).
