@@ -137,7 +137,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         Ok(false) => Ok(ExitCode::from(1)),
         Err(err) if output::stdout_closed(&err) => Err(err),
         Err(err) => {
-            eprintln!("error: {err:#}");
+            output::print_error(&err);
             Ok(ExitCode::from(2))
         }
     }

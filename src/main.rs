@@ -57,7 +57,7 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(err) if output::stdout_closed(&err) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            output::print_error(&err);
             ExitCode::from(1)
         }
     }

@@ -337,6 +337,34 @@ fn faces_that_repeat_a_vertex_are_read_as_opensubdiv_reads_them_with_a_warning()
 }
 
 #[test]
+fn errors_quote_a_few_dozen_characters_of_a_huge_bad_input() {
+    // A 100,000-digit token in an OBJ, then in a scene file: the message names the place and
+    // quotes the start, not all of it.
+    let token = "9".repeat(100_000);
+    let o = tailor(
+        &["subdivide", "-", "-l", "1"],
+        Some(&format!("v 0 0 0\nv 1 0 0\nv 0 1 {token}x\nf 1 2 3\n")),
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("<stdin>:3: malformed number '9999") && err.contains("… (100001 bytes)'"),
+        "{err}"
+    );
+    assert!(err.len() < 200, "{} bytes of error", err.len());
+    let scene = scratch("huge_token.toml");
+    fs::write(&scene, format!("[scene]\nfps = {token}x\n")).unwrap();
+    let o = tailor(&["simulate", scene.to_str().unwrap()], None);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("huge_token.toml") && err.contains("line 2"),
+        "{err}"
+    );
+    assert!(err.len() < 1000, "{} bytes of error", err.len());
+}
+
+#[test]
 fn failed_run_keeps_the_previous_output() {
     let out = scratch("kept.obj");
     fs::write(&out, "previous").unwrap();

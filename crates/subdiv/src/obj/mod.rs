@@ -169,6 +169,19 @@ impl ObjError {
     }
 }
 
+/// At most this many characters of the input are quoted in an error: a bad token can be a
+/// whole file's worth of bytes, and an error message is read by a person.
+const QUOTED_CHARS: usize = 40;
+
+/// `text` as an error quotes it: whole when short, else its first [`QUOTED_CHARS`] characters
+/// and its length.
+pub(super) fn excerpt(text: &str) -> String {
+    match text.char_indices().nth(QUOTED_CHARS) {
+        None => text.to_owned(),
+        Some((end, _)) => format!("{}… ({} bytes)", &text[..end], text.len()),
+    }
+}
+
 /// What is wrong with one line of an OBJ file.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Problem {

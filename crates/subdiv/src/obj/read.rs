@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use super::chunk::Chunk;
 use super::{
     BOUNDARY_CODES, CREASE_METHOD_NAMES, FVAR_CODES, Group, ObjDocument, ObjError, Problem,
-    TRIANGLE_RULE_NAMES,
+    TRIANGLE_RULE_NAMES, excerpt,
 };
 use crate::mesh::{Corner, Crease, FaceVarying, Mesh, MeshError, Point, Uv, Validation};
 use crate::options::Options;
@@ -297,7 +297,7 @@ impl Reader {
             _ if IGNORED.contains(&keyword) => {}
             _ => {
                 return Err(Problem::UnknownStatement {
-                    keyword: keyword.to_owned(),
+                    keyword: excerpt(keyword),
                 });
             }
         }
@@ -355,7 +355,7 @@ impl Reader {
             let g = *self.group_index.entry(name.to_owned()).or_insert(next);
             if g == next {
                 self.groups.push(Group {
-                    name: name.to_owned(),
+                    name: excerpt(name),
                     faces: Vec::new(),
                 });
             }
@@ -378,7 +378,7 @@ impl Reader {
         let declared = ni.saturating_add(nf).saturating_add(ns);
         if rest.len() != declared {
             return Err(Problem::TagArgumentCount {
-                tag: (*name).to_owned(),
+                tag: excerpt(name),
                 declared,
                 found: rest.len(),
             });
@@ -399,7 +399,7 @@ impl Reader {
                 Err(Problem::TagShape {
                     tag,
                     expected,
-                    counts: (*counts).to_owned(),
+                    counts: excerpt(counts),
                 })
             }
         };
@@ -474,7 +474,7 @@ impl Reader {
             "vertexedit" | "edgeedit" | "faceedit" => {}
             _ => {
                 return Err(Problem::UnknownTag {
-                    name: (*name).to_owned(),
+                    name: excerpt(name),
                 });
             }
         }
@@ -600,7 +600,7 @@ pub(super) fn corner_parts(token: &str) -> Result<(&str, Option<&str>, Option<&s
         || normal == Some("")
     {
         return Err(Problem::MalformedCorner {
-            token: token.to_owned(),
+            token: excerpt(token),
         });
     }
     Ok((vertex, uv.filter(|t| !t.is_empty()), normal))
@@ -625,7 +625,7 @@ fn coordinates(
         let x = number(token)?;
         if !x.is_finite() {
             return Err(Problem::NonFinite {
-                token: (*token).to_owned(),
+                token: excerpt(token),
             });
         }
         if let Some(slot) = c.get_mut(k) {
@@ -637,13 +637,13 @@ fn coordinates(
 
 fn number(token: &str) -> Result<f64, Problem> {
     token.parse().map_err(|_| Problem::MalformedNumber {
-        token: token.to_owned(),
+        token: excerpt(token),
     })
 }
 
 pub(super) fn integer(token: &str) -> Result<i64, Problem> {
     token.parse().map_err(|_| Problem::MalformedNumber {
-        token: token.to_owned(),
+        token: excerpt(token),
     })
 }
 
@@ -681,7 +681,7 @@ fn lookup<T: Copy, K: PartialEq + std::fmt::Display>(
         .map(|(v, _)| *v)
         .ok_or_else(|| Problem::UnknownTagValue {
             tag,
-            value: key.to_string(),
+            value: excerpt(&key.to_string()),
             expected,
         })
 }
