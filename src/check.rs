@@ -5,9 +5,8 @@
 //! report whole.
 //! Counts say how bad a frame is, not where to look, so each frame also names its deepest
 //! vertex and its first crossing face pair (in ascending order, so the same mesh always names
-//! the same pair): here by the vertex's position (the reader numbers vertices in order of
-//! first use, not the file's) and the faces' order in the file; `tailor simulate` maps them
-//! back to the garment it simulated.
+//! the same pair): here by the vertex's position and the faces' order in the file; `tailor
+//! simulate` maps them back to the garment it simulated.
 //!
 //! Inside/outside uses the body's pseudo-normals (`tailor_collide::Hierarchy::signed_distances`)
 //! and needs a closed body; an open body is checked by distance only. Hierarchies are built for

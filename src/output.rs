@@ -166,19 +166,26 @@ pub fn write_to(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()
     }
 }
 
-/// Longest line of an error message, in characters, before it is cut.
-const ERROR_LINE_CHARS: usize = 200;
+/// Characters an error line keeps from its start and from its end when it is cut.
+const ERROR_LINE_HEAD: usize = 600;
+const ERROR_LINE_TAIL: usize = 200;
 
-/// Prints `error: …` for `err` and its causes on standard error, each line of the message cut
-/// to [`ERROR_LINE_CHARS`] characters: parsers quote the input they reject (the TOML parser a
+/// Prints `error: …` for `err` and its causes on standard error, each line of the message
+/// longer than [`ERROR_LINE_HEAD`] + [`ERROR_LINE_TAIL`] characters cut to its start and its
+/// end (where the reason usually is): parsers quote the input they reject (the TOML parser a
 /// whole line of it), and a 100 MB line of bad input must not become 100 MB of message.
 pub fn print_error(err: &anyhow::Error) {
     let text = format!("{err:#}");
     let cut: Vec<String> = text
         .lines()
-        .map(|line| match line.char_indices().nth(ERROR_LINE_CHARS) {
-            None => line.to_owned(),
-            Some((end, _)) => format!("{}… ({} bytes)", &line[..end], line.len()),
+        .map(|line| {
+            let chars = line.chars().count();
+            if chars <= ERROR_LINE_HEAD + ERROR_LINE_TAIL {
+                return line.to_owned();
+            }
+            let head: String = line.chars().take(ERROR_LINE_HEAD).collect();
+            let tail: String = line.chars().skip(chars - ERROR_LINE_TAIL).collect();
+            format!("{head} … ({} bytes) … {tail}", line.len())
         })
         .collect();
     eprintln!("error: {}", cut.join("\n"));

@@ -229,7 +229,19 @@ fn unreadable_input_exits_2_naming_the_file() {
     let out = tailor(&[nan.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("nan.obj") && err.contains("line 3"), "{err}");
+    assert!(err.contains("nan.obj:3: "), "{err}");
+    // The reader every command shares: a face of two corners and a forward reference are
+    // errors naming their lines, not clean cloth.
+    for (name, text, line) in [
+        ("two.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n", 5),
+        ("ahead.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\nv 0 1 0\n", 3),
+    ] {
+        let bad = write(&dir, name, text);
+        let out = tailor(&[bad.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(&format!("{name}:{line}: ")), "{err}");
+    }
 
     let cloth = write(&dir, "cloth.obj", &clean_sheet());
     let out = tailor(&[cloth.to_str().unwrap(), "--against", nan.to_str().unwrap()]);

@@ -86,6 +86,8 @@ pub fn parse_with(
     source: &str,
     validation: Validation,
 ) -> Result<ObjDocument, ObjError> {
+    // A UTF-8 byte-order mark, which some Windows tools write, is not a statement.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     parse_in_chunks(text, source, validation, CHUNK_BYTES)
 }
 
