@@ -67,9 +67,13 @@ fn parse<T: FromStr<Err = tailor_subdiv::options::UnknownOption>>(s: &str) -> Re
 const MAX_FACES: usize = 200_000_000;
 
 /// Peak memory of `tailor subdivide` per face written, bytes: the refinement's tables, the
-/// mesh and the formatted text (the cape at levels 4 and 5 peaks at 620 and 580 bytes a face
-/// written, resident), rounded up.
+/// mesh and the formatted text (the cape, with its UVs, at levels 4, 5 and 6 peaks at 620,
+/// 580 and 516 bytes a face written, resident), rounded up.
 const BYTES_PER_FACE: u64 = 640;
+
+/// The same with `--limit` or `--normals`, which add the limit stencils and positions (the
+/// cape at level 6 with both peaks at 1056 bytes a face).
+const BYTES_PER_FACE_LIMIT: u64 = 1100;
 
 /// The memory this process may still take, bytes, when the system says: the least of the
 /// memory available (`/proc/meminfo`), what is left under the cgroup's limit
@@ -165,7 +169,12 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             args.input.display()
         );
     }
-    let needed = faces_out as u64 * BYTES_PER_FACE;
+    let per_face = if args.limit || args.normals {
+        BYTES_PER_FACE_LIMIT
+    } else {
+        BYTES_PER_FACE
+    };
+    let needed = faces_out as u64 * per_face;
     if let Some(available) = available_memory()
         && needed > available
     {

@@ -384,12 +384,12 @@ fn a_refinement_larger_than_memory_is_refused_before_it_starts() {
     let dir = scratch("memory");
     fs::create_dir_all(&dir).unwrap();
     let cape = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/garments/cape.obj");
-    let limited = |level: &str| {
+    let limited_to = |kilobytes: u32, level: &str, extra: &str| {
         let out = dir.join(format!("cape_{level}.obj"));
         Command::new("sh")
             .arg("-c")
             .arg(format!(
-                "ulimit -v 1000000 && exec \"$0\" subdivide \"$1\" -l {level} -o \"$2\""
+                "ulimit -v {kilobytes} && exec \"$0\" subdivide \"$1\" -l {level} {extra} -o \"$2\""
             ))
             .arg(env!("CARGO_BIN_EXE_tailor"))
             .arg(&cape)
@@ -397,6 +397,7 @@ fn a_refinement_larger_than_memory_is_refused_before_it_starts() {
             .output()
             .unwrap()
     };
+    let limited = |level: &str| limited_to(1_000_000, level, "");
     let refused = limited("7");
     let error = String::from_utf8_lossy(&refused.stderr);
     assert_eq!(refused.status.code(), Some(1), "{error}");
@@ -411,6 +412,15 @@ fn a_refinement_larger_than_memory_is_refused_before_it_starts() {
         small.status.success(),
         "{}",
         String::from_utf8_lossy(&small.stderr)
+    );
+    // Limit positions and normals take about twice the memory: level 6 with both (2.0 GB
+    // resident) is refused under 2 GB, where the plain estimate (1.3 GB) let it start.
+    let refused = limited_to(2_000_000, "6", "--limit --normals");
+    let error = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{error}");
+    assert!(
+        error.contains("makes 1966080 faces and needs about 2.2 GB"),
+        "{error}"
     );
 }
 
