@@ -6,9 +6,9 @@
 //! paths hold and the shot can be re-run or edited there; then [`crate::simulate`] runs it into
 //! `tailor-out/`, and `tailor preview`'s contact sheet of it is drawn to
 //! `tailor-out/preview.png`. The demo simulates the whole walk, [`FRAMES`] frames at the
-//! scene's resolution (the 525-vertex cape, its level-2 surface, the body at level 2): about
-//! 55 ms a frame with the surface clearance pass, 11–13 s in all on this two-core machine in
-//! a release build (measured 2026-12-01), so nothing had to be coarsened.
+//! scene's resolution (the 525-vertex cape, its level-2 surface, the body at level 2): a few
+//! seconds on a two-core machine in a release build (`docs/BENCHMARKS.md`), so nothing had to
+//! be coarsened.
 //! `--frames` runs fewer.
 
 use std::path::{Path, PathBuf};

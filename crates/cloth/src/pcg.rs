@@ -5,8 +5,8 @@
 //! runs on the filtered system, every residual and search direction passing through S, so the
 //! constrained components of the unknown keep their initial values *exactly*: the constraints
 //! are not soft penalties. The preconditioner is aggregation multigrid (additive at the fine level) on the
-//! filtered matrix (the private `multigrid` module), symmetric so CG stays CG: about 20
-//! iterations per substep of the 64² drape in contact where block-Jacobi alone needed 150.
+//! filtered matrix (the private `multigrid` module), symmetric so CG stays CG, and its
+//! iteration count barely grows with the garment's resolution where block-Jacobi's does.
 //! Each iteration makes three parallel passes over fixed chunks of particles (the new
 //! direction, the product with the matrix and p · q, the update of x and r with the fine
 //! part of the preconditioned r and the sums r · r and r · z) and the coarse levels' cycle in
