@@ -47,7 +47,7 @@ impl Surface {
     /// When the refined mesh cannot carry a collision hierarchy.
     pub fn new(control: &Mesh, level: u32, normals: bool) -> Result<Self> {
         let refiner = Refiner::new(control, level as usize);
-        let evaluator = refiner.evaluator();
+        let evaluator = Evaluator::new(&refiner);
         let tangents = normals.then(|| {
             let [_, t1, t2] = refiner.limit_stencils();
             [t1, t2]

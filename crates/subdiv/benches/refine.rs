@@ -2,7 +2,7 @@
 //! topology refinement (every level complete, and with the minimal last level that evaluation
 //! needs), refinement of positions (minimal topology plus positions), stencil table
 //! construction, and applying a stencil table to new positions (the per-frame cost of a cloth
-//! simulation) against the [`tailor_subdiv::Evaluator`] (regular faces as B-spline patches)
+//! simulation) against the [`Evaluator`] (regular faces as B-spline patches)
 //! that replaces it, and the floor under both (writing as many points). `compare-osd/` times
 //! the same cases against OpenSubdiv itself. Throughput is in refined faces per second; the
 //! allocation profiler's "max alloc" row is the peak memory a run holds.
@@ -14,7 +14,7 @@ use common::grid;
 use divan::counter::ItemsCount;
 use divan::{AllocProfiler, Bencher, black_box};
 use rayon::prelude::*;
-use tailor_subdiv::{Mesh, Point, Refiner};
+use tailor_subdiv::{Evaluator, Mesh, Point, Refiner};
 
 mod common;
 
@@ -86,13 +86,13 @@ fn stencil_apply(bencher: Bencher, &(side, level): &(usize, usize)) {
 #[divan::bench(args = cases(), sample_count = 10)]
 fn evaluator_build(bencher: Bencher, &(side, level): &(usize, usize)) {
     let refiner = Refiner::for_evaluation(&grid(side), level);
-    bencher.bench(|| black_box(refiner.evaluator()));
+    bencher.bench(|| black_box(Evaluator::new(&refiner)));
 }
 
 #[divan::bench(args = cases(), sample_count = 10)]
 fn evaluator_apply(bencher: Bencher, &(side, level): &(usize, usize)) {
     let mesh = grid(side);
-    let evaluator = Refiner::for_evaluation(&mesh, level).evaluator();
+    let evaluator = Evaluator::new(&Refiner::for_evaluation(&mesh, level));
     let mut out = vec![Point::origin(); evaluator.len()];
     bencher
         .counter(refined_faces(side, level))
@@ -102,9 +102,7 @@ fn evaluator_apply(bencher: Bencher, &(side, level): &(usize, usize)) {
 /// The floor under `evaluator_apply`: writing as many points, a constant in parallel chunks.
 #[divan::bench(args = cases(), sample_count = 10)]
 fn write_floor(bencher: Bencher, &(side, level): &(usize, usize)) {
-    let points = Refiner::for_evaluation(&grid(side), level)
-        .evaluator()
-        .len();
+    let points = Evaluator::new(&Refiner::for_evaluation(&grid(side), level)).len();
     let mut out = vec![Point::origin(); points];
     bencher.counter(refined_faces(side, level)).bench_local(|| {
         let value = black_box(Point::new(1.0, 2.0, 3.0));

@@ -13,6 +13,7 @@ use std::fmt;
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use crate::evaluator::Evaluator;
 use crate::mesh::{Mesh, Validation};
 use crate::obj;
 use crate::options::FVarLinear;
@@ -209,7 +210,7 @@ pub fn check_refined(shape: &Mesh, level: usize, reference: &Reference) -> Resul
         check_uvs(&mesh, reference)?;
     }
     // The stencil table, then the evaluator built on it (regular faces as B-spline patches).
-    let evaluator = refiner.evaluator();
+    let evaluator = Evaluator::new(&refiner);
     let mut out = vec![crate::mesh::Point::origin(); evaluator.len()];
     evaluator.stencils().apply(shape.positions(), &mut out);
     let ours: Vec<[f64; 3]> = out.iter().map(|p| [p.x, p.y, p.z]).collect();

@@ -3,8 +3,9 @@
 //!
 //! [`Refiner::new`] builds every level's topology once. Positions, UVs or any per-vertex field
 //! are then refined level by level ([`Refiner::refine`]), or through a [`StencilTable`] built once
-//! ([`Refiner::stencils`]), or an [`Evaluator`] that also takes regular faces as B-spline
-//! patches ([`Refiner::evaluator`]), when the same topology is evaluated every frame.
+//! ([`Refiner::stencils`]), or an [`Evaluator`](crate::Evaluator) that also takes regular faces as B-spline
+//! patches (`Evaluator::new(&refiner)`, as OpenSubdiv's factories take a refiner), when the same
+//! topology is evaluated every frame.
 //!
 //! As in OpenSubdiv (`UniformOptions::fullTopologyInLastLevel`), evaluation needs only the last
 //! level's faces and tags, not its edges and incidences, which are most of its cost:
@@ -15,7 +16,6 @@ use std::sync::OnceLock;
 
 use nalgebra::Vector3;
 
-use crate::evaluator::Evaluator;
 use crate::fvar::FVarRefiner;
 use crate::limit::LimitMasks;
 use crate::mesh::{Corner, Crease, FaceVarying, Mesh, Point, Uv, Validation};
@@ -158,13 +158,6 @@ impl Refiner {
             table = table.refine(self.parent_level(l), step);
         }
         table
-    }
-
-    /// An [`Evaluator`]: the stencils of [`Self::stencils`] with the control mesh's regular
-    /// faces as B-spline patches, for re-evaluating new control points every frame.
-    #[must_use]
-    pub fn evaluator(&self) -> Evaluator {
-        Evaluator::new(self)
     }
 
     /// Stencils of the limit positions and tangents of the last level's vertices over the

@@ -88,7 +88,7 @@ fn irregular_grid(n: usize) -> Mesh {
 /// control points' extent.
 fn worst(mesh: &Mesh, levels: usize) -> (f64, Evaluator) {
     let refiner = Refiner::for_evaluation(mesh, levels);
-    let evaluator = refiner.evaluator();
+    let evaluator = Evaluator::new(&refiner);
     let stencils = refiner.stencils();
     assert_eq!(evaluator.stencils(), &stencils);
     let control = mesh.positions();
@@ -237,7 +237,7 @@ fn reference_shapes_match() {
 fn other_value_types_and_levels_fall_back_or_match() {
     let mesh = irregular_grid(8);
     let refiner = Refiner::for_evaluation(&mesh, 2);
-    let evaluator = refiner.evaluator();
+    let evaluator = Evaluator::new(&refiner);
     let stencils = refiner.stencils();
     let uv: Vec<Vector2<f64>> = mesh.positions().iter().map(|p| p.xy().coords).collect();
     let mut a = vec![Vector2::zeros(); stencils.len()];
@@ -258,7 +258,7 @@ fn other_value_types_and_levels_fall_back_or_match() {
     // Levels 0, 1 and past the kernels are the stencil table itself.
     for levels in [0, 1, 5] {
         let refiner = Refiner::for_evaluation(&grid(4), levels);
-        let e = refiner.evaluator();
+        let e = Evaluator::new(&refiner);
         assert_eq!(e.regular_faces(), 0);
         let mut a = vec![Point::origin(); e.len()];
         let mut b = a.clone();
@@ -271,7 +271,7 @@ fn other_value_types_and_levels_fall_back_or_match() {
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let mesh = irregular_grid(30);
-    let evaluator = Refiner::for_evaluation(&mesh, 3).evaluator();
+    let evaluator = Evaluator::new(&Refiner::for_evaluation(&mesh, 3));
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
