@@ -38,6 +38,7 @@ mod hierarchy;
 mod inside;
 mod intersect;
 mod local;
+mod memory;
 mod proximity;
 mod topology;
 mod traverse;
@@ -48,8 +49,7 @@ pub use continuous::{EdgeEdgeImpact, Impacts, VertexTriangleImpact};
 pub use edges::{EdgeProximity, segments_closest_points};
 pub use error::CollideError;
 pub use hierarchy::Hierarchy;
-pub use local::LocalFaces;
-pub use proximity::{Closest, Neighbours};
+pub use proximity::{Closest, LocalFaces, Neighbours};
 pub use triangle::triangles_intersect;
 
 /// A point in space, in metres.

@@ -26,33 +26,8 @@ use rayon::prelude::*;
 
 use crate::error::CollideError;
 use crate::hierarchy::Hierarchy;
-use crate::proximity::Neighbours;
+use crate::proximity::{LocalFaces, Neighbours};
 use crate::topology::group_by_owner;
-
-/// For each vertex of a mesh, a sorted list of faces: a CSR table. The empty table (its
-/// default) lists nothing for any vertex.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct LocalFaces {
-    offsets: Vec<u32>,
-    faces: Vec<u32>,
-}
-
-impl LocalFaces {
-    /// The faces listed for vertex `v`, sorted; none beyond the table.
-    #[must_use]
-    pub fn of(&self, v: usize) -> &[u32] {
-        match self.offsets.get(v..v + 2) {
-            Some(&[first, end]) => &self.faces[first as usize..end as usize],
-            _ => &[],
-        }
-    }
-
-    /// How many vertex–face pairs the table lists.
-    #[must_use]
-    pub fn pair_count(&self) -> usize {
-        self.faces.len()
-    }
-}
 
 impl Hierarchy {
     /// For each vertex, the faces around it on the surface (see the module docs of

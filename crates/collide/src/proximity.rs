@@ -35,7 +35,6 @@ use rayon::prelude::*;
 use crate::convert::{to_glam, to_point, to_vector};
 use crate::error::CollideError;
 use crate::hierarchy::{Hierarchy, Pending, check_distance, fresh};
-use crate::local::LocalFaces;
 use crate::triangle::is_degenerate;
 use crate::{Point, Vector};
 
@@ -56,6 +55,32 @@ pub struct Closest {
     pub distance: f64,
     /// The triangle's unit normal (right-handed around its vertices).
     pub normal: Vector,
+}
+
+/// For each vertex of a mesh, a sorted list of faces a self-proximity query skips: a CSR
+/// table, made by [`Hierarchy::local_faces`]. The empty table (its default) lists nothing for
+/// any vertex.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LocalFaces {
+    pub(crate) offsets: Vec<u32>,
+    pub(crate) faces: Vec<u32>,
+}
+
+impl LocalFaces {
+    /// The faces listed for vertex `v`, sorted; none beyond the table.
+    #[must_use]
+    pub fn of(&self, v: usize) -> &[u32] {
+        match self.offsets.get(v..v + 2) {
+            Some(&[first, end]) => &self.faces[first as usize..end as usize],
+            _ => &[],
+        }
+    }
+
+    /// How many vertex–face pairs the table lists.
+    #[must_use]
+    pub fn pair_count(&self) -> usize {
+        self.faces.len()
+    }
 }
 
 /// For each query, every face within a distance: a CSR table of [`Closest`] hits, each the

@@ -11,7 +11,7 @@
 //! features is ever tested twice.
 
 use crate::error::CollideError;
-use crate::hierarchy::heap;
+use crate::memory::heap;
 
 /// Validated faces with their fan triangles, edges and feature owners. All tables are flat.
 #[derive(Clone, Debug)]

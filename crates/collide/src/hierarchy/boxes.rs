@@ -25,7 +25,7 @@ use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Vector as DVec3;
 use rayon::prelude::*;
 
-use super::heap;
+use crate::memory::heap;
 
 /// Marks a child reference as a leaf: the rest of the bits are the face.
 const LEAF: u32 = 1 << 31;

@@ -19,6 +19,7 @@ use rayon::prelude::*;
 use crate::Point;
 use crate::convert::to_glam;
 use crate::error::CollideError;
+use crate::memory::heap;
 use crate::topology::Topology;
 
 use boxes::Boxes;
@@ -283,11 +284,6 @@ pub(crate) fn fresh<T: Default>(
     let mut out = T::default();
     into(&mut out)?;
     Ok(out)
-}
-
-/// Heap bytes of a vector: its capacity times its element size.
-pub(crate) fn heap<T>(v: &Vec<T>) -> usize {
-    v.capacity() * size_of::<T>()
 }
 
 /// Converts positions to glam, checking their count and that they are finite.
