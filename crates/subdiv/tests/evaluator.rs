@@ -6,45 +6,24 @@
 
 use std::path::Path;
 
+use common::{at, grid_at, grid_faces};
 use nalgebra::Vector2;
 use tailor_subdiv::conformance::read_shape;
 use tailor_subdiv::{Corner, Crease, CreaseMethod, Evaluator, Mesh, Point, Refiner};
 
+mod common;
+
 /// An `n` × `n` grid of quads, its points moved by a deterministic jitter so that no weight
 /// meets a symmetric cancellation.
 fn grid(n: usize) -> Mesh {
-    let mut positions = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let h = ((i * 7919 + j * 104_729) % 1000) as f64 / 1000.0;
-            positions.push(Point::new(
-                i as f64 + 0.3 * h,
-                j as f64 - 0.2 * h,
-                (i as f64 * 0.7).sin() + h,
-            ));
-        }
-    }
-    let faces = grid_faces(n);
-    Mesh::from_polygons(positions, &faces).unwrap()
-}
-
-fn at(n: usize, i: usize, j: usize) -> u32 {
-    (j * (n + 1) + i) as u32
-}
-
-fn grid_faces(n: usize) -> Vec<Vec<u32>> {
-    (0..n)
-        .flat_map(|j| {
-            (0..n).map(move |i| {
-                vec![
-                    at(n, i, j),
-                    at(n, i + 1, j),
-                    at(n, i + 1, j + 1),
-                    at(n, i, j + 1),
-                ]
-            })
-        })
-        .collect()
+    grid_at(n, |i, j| {
+        let h = ((i * 7919 + j * 104_729) % 1000) as f64 / 1000.0;
+        Point::new(
+            i as f64 + 0.3 * h,
+            j as f64 - 0.2 * h,
+            (i as f64 * 0.7).sin() + h,
+        )
+    })
 }
 
 /// A grid with irregular spots: two quads merged into a hexagon (valence 3 at the removed

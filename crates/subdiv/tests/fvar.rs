@@ -3,26 +3,13 @@
 //! a seam, pinned corners in the corner modes. (Exactness to OpenSubdiv is checked by the
 //! conformance run over `../shared/reference/opensubdiv/facevarying`.)
 
-use tailor_subdiv::{Crease, FVarLinear, FaceVarying, Mesh, Point, Refiner, Uv};
+use tailor_subdiv::{Crease, FVarLinear, FaceVarying, Mesh, Refiner, Uv};
+
+use common::flat_grid;
+
+mod common;
 
 const EPS: f64 = 1e-14;
-
-/// An `n` x `n` grid of unit quads in the plane, faces row by row.
-fn grid(n: usize) -> Mesh {
-    let mut p = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            p.push(Point::new(i as f64, j as f64, 0.0));
-        }
-    }
-    let idx = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let faces: Vec<[u32; 4]> = (0..n)
-        .flat_map(|j| {
-            (0..n).map(move |i| [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)])
-        })
-        .collect();
-    Mesh::from_polygons(p, &faces).unwrap()
-}
 
 /// UVs with a seam down the middle column of vertices of a 2 x 2 grid: faces on the right use
 /// their own copies of the middle values, shifted by 10 in u. `top` is the UV of vertex 7.
@@ -41,7 +28,7 @@ fn seamed_2x2(top: Uv) -> FaceVarying {
         7 => 11,
         v => v,
     };
-    let mesh = grid(2);
+    let mesh = flat_grid(2);
     let indices = (0..mesh.face_count())
         .flat_map(|f| {
             let right_face = f % 2 == 1;
@@ -71,7 +58,7 @@ fn close(a: Uv, b: Uv) -> bool {
 
 #[test]
 fn mode_all_is_bilinear_across_a_seam() {
-    let mesh = with_uvs(grid(2), seamed_2x2(Uv::new(1.3, 2.4)), FVarLinear::All);
+    let mesh = with_uvs(flat_grid(2), seamed_2x2(Uv::new(1.3, 2.4)), FVarLinear::All);
     let (_, uvs) = refine(&mesh, 1);
     let base = mesh.uvs().unwrap();
     for f in 0..mesh.face_count() {
@@ -99,7 +86,7 @@ fn mode_all_is_bilinear_across_a_seam() {
 #[test]
 fn mode_none_without_seams_matches_vertex_refinement() {
     // A 3 x 3 grid with a crease and a semi-sharp crease, UVs one per vertex.
-    let mesh = grid(3)
+    let mesh = flat_grid(3)
         .with_creases(vec![
             Crease {
                 vertices: [5, 6],
@@ -135,7 +122,7 @@ fn mode_none_without_seams_matches_vertex_refinement() {
 #[test]
 fn a_seam_refines_each_side_as_a_crease() {
     let top = Uv::new(1.0, 2.5);
-    let mesh = with_uvs(grid(2), seamed_2x2(top), FVarLinear::None);
+    let mesh = with_uvs(flat_grid(2), seamed_2x2(top), FVarLinear::None);
     let (refiner, uvs) = refine(&mesh, 1);
     let level = refiner.last();
     // The centre vertex (4) has two values, left then right, each on the crease rule
@@ -167,7 +154,7 @@ fn corner_modes_pin_boundary_corners() {
     let values: Vec<Uv> = (0..9)
         .map(|v| Uv::new((v % 3) as f64 * 0.7, (v / 3) as f64 * 0.4))
         .collect();
-    let base = grid(2);
+    let base = flat_grid(2);
     let indices = base.face_vertices().to_vec();
     for (mode, pinned) in [(FVarLinear::None, false), (FVarLinear::CornersOnly, true)] {
         let mesh = with_uvs(

@@ -6,6 +6,10 @@
 use nalgebra::Vector3;
 use tailor_subdiv::{BoundaryInterpolation, Crease, Mesh, Point, Refiner, subdivide};
 
+use common::flat_grid;
+
+mod common;
+
 fn cube() -> Mesh {
     let p = |x, y, z| Point::new(x, y, z);
     let positions = vec![
@@ -26,20 +30,6 @@ fn cube() -> Mesh {
         [1, 7, 5, 3],
         [6, 0, 2, 4],
     ];
-    Mesh::from_polygons(positions, &faces).unwrap()
-}
-
-fn grid(n: usize) -> Mesh {
-    let mut positions = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            positions.push(Point::new(i as f64, j as f64, 0.0));
-        }
-    }
-    let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let faces: Vec<[u32; 4]> = (0..n)
-        .flat_map(|j| (0..n).map(move |i| [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]))
-        .collect();
     Mesh::from_polygons(positions, &faces).unwrap()
 }
 
@@ -69,7 +59,7 @@ fn cube_corner_moves_to_five_ninths() {
 fn sharp_crease_follows_the_cubic_b_spline_rule() {
     // An infinitely sharp crease across a flat grid, lifted in z at its middle vertex:
     // crease vertex point = 3/4 V + 1/8 (both crease neighbours), edge point = midpoint.
-    let mut mesh = grid(4);
+    let mut mesh = flat_grid(4);
     let mut p = mesh.positions().to_vec();
     p[12].z = 1.0; // centre of the 5x5 vertex grid
     mesh.set_positions(&p).unwrap();
@@ -92,7 +82,7 @@ fn sharp_crease_follows_the_cubic_b_spline_rule() {
 
 #[test]
 fn half_sharp_edge_blends_crease_and_smooth_by_its_sharpness() {
-    let mut mesh = grid(2);
+    let mut mesh = flat_grid(2);
     let mut p = mesh.positions().to_vec();
     p[4].z = 1.0;
     mesh.set_positions(&p).unwrap();
@@ -115,7 +105,7 @@ fn half_sharp_edge_blends_crease_and_smooth_by_its_sharpness() {
 
 #[test]
 fn flat_grid_limit_is_flat_with_upward_normals() {
-    let (refined, limit) = subdivide(&grid(3), 2, true);
+    let (refined, limit) = subdivide(&flat_grid(3), 2, true);
     let limit = limit.unwrap();
     assert_eq!(limit.positions.len(), refined.vertex_count());
     for (p, n) in limit.positions.iter().zip(&limit.normals) {
