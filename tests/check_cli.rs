@@ -6,28 +6,21 @@
 
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-/// A fresh directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("check_cli_{name}"));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
+use common::scratch;
+
+mod common;
+
+/// Runs `tailor check ARGS`.
+fn tailor(args: &[&str]) -> Output {
+    common::tailor(&[&["check"], args].concat())
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);
     fs::write(&path, text).unwrap();
     path
-}
-
-fn tailor(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tailor"))
-        .arg("check")
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 /// The unit cube `[0, 1]³`, six outward quads.
@@ -86,7 +79,7 @@ fn report(dir: &Path, args: &[&Path], options: &[&str], code: i32) -> serde_json
 
 #[test]
 fn clean_cloth_exits_0() {
-    let dir = scratch("clean");
+    let dir = scratch("check_cli_clean");
     let cloth = write(&dir, "cloth.obj", &clean_sheet());
     let body = write(&dir, "body.obj", CUBE);
     let r = report(&dir, &[&cloth, Path::new("--against"), &body], &[], 0);
@@ -99,7 +92,7 @@ fn clean_cloth_exits_0() {
 
 #[test]
 fn penetrating_cloth_exits_1_with_counts() {
-    let dir = scratch("penetrating");
+    let dir = scratch("check_cli_penetrating");
     let cloth = write(&dir, "cloth.obj", &sunk_sheet());
     let body = write(&dir, "body.obj", CUBE);
     let args: [&Path; 3] = [&cloth, Path::new("--against"), &body];
@@ -126,7 +119,7 @@ fn penetrating_cloth_exits_1_with_counts() {
 
 #[test]
 fn self_intersecting_cloth_exits_1() {
-    let dir = scratch("crossed");
+    let dir = scratch("check_cli_crossed");
     let cloth = write(&dir, "cloth.obj", CROSSED);
     let r = report(&dir, &[&cloth], &[], 1);
     assert_eq!(r["total"]["self_intersecting_pairs"], 1);
@@ -144,7 +137,7 @@ fn self_intersecting_cloth_exits_1() {
 
 #[test]
 fn sequences_are_checked_frame_by_frame() {
-    let dir = scratch("sequence");
+    let dir = scratch("check_cli_sequence");
     write(&dir, "cloth_0001.obj", &clean_sheet());
     write(&dir, "cloth_0002.obj", &sunk_sheet());
     write(&dir, "cloth_0003.obj", &clean_sheet());
@@ -195,7 +188,7 @@ fn sequences_are_checked_frame_by_frame() {
 
 #[test]
 fn open_body_is_checked_by_distance_with_a_warning() {
-    let dir = scratch("open");
+    let dir = scratch("check_cli_open");
     let cloth = write(&dir, "cloth.obj", &sunk_sheet());
     // Only the cube's top face: the sheet lies 0.1 below it.
     let body = write(
@@ -219,7 +212,7 @@ fn open_body_is_checked_by_distance_with_a_warning() {
 
 #[test]
 fn unreadable_input_exits_2_naming_the_file() {
-    let dir = scratch("unreadable");
+    let dir = scratch("check_cli_unreadable");
     let missing = dir.join("nowhere.obj");
     let out = tailor(&[missing.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
@@ -256,7 +249,7 @@ fn unreadable_input_exits_2_naming_the_file() {
 fn the_report_replaces_the_earlier_one_whole() {
     // A second name for the earlier report sees whether it was rewritten in place (where a
     // failed write would leave it cut short) or replaced by a new file.
-    let dir = scratch("replace");
+    let dir = scratch("check_cli_replace");
     let cloth = write(&dir, "cloth.obj", &clean_sheet());
     let earlier = write(&dir, "report.json", "{\"earlier\": true}\n");
     fs::hard_link(&earlier, dir.join("kept.json")).unwrap();

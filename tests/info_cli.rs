@@ -1,18 +1,13 @@
 //! `tailor info` speaks to a person: coordinates with six significant digits, options by the
 //! names of the flags that set them.
 
-use std::process::Command;
+use common::{shape, tailor};
+
+mod common;
 
 #[test]
 fn info_prints_readable_coordinates_and_option_names() {
-    let cube = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/crates/subdiv/tests/data/opensubdiv/shapes/catmark_cube.obj"
-    );
-    let out = Command::new(env!("CARGO_BIN_EXE_tailor"))
-        .args(["info", cube])
-        .output()
-        .unwrap();
+    let out = tailor(&["info", &shape("catmark_cube.obj")]);
     assert!(out.status.success());
     let stdout = String::from_utf8_lossy(&out.stdout);
     // The file gives ±1.414214 in x and y: six significant digits, the same decimals for all.

@@ -12,24 +12,9 @@ use std::os::unix::fs::{FileTypeExt, symlink};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("output_cli_{name}"));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::{root, scratch, shape};
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// A cube's control mesh.
-fn cube() -> String {
-    root()
-        .join("crates/subdiv/tests/data/opensubdiv/shapes/catmark_cube.obj")
-        .display()
-        .to_string()
-}
+mod common;
 
 /// Every command that prints to standard output, with arguments that make it print; `dir`
 /// takes what they write to files.
@@ -38,9 +23,9 @@ fn printing_commands(dir: &Path) -> Vec<Vec<String>> {
     let scene = root().join("assets/scenes/cape.toml");
     let out = dir.join("shot");
     [
-        vec!["info", &cube()],
+        vec!["info", &shape("catmark_cube.obj")],
         vec!["check", cape.to_str().unwrap()],
-        vec!["subdivide", &cube(), "-l", "5"],
+        vec!["subdivide", &shape("catmark_cube.obj"), "-l", "5"],
         vec![
             "simulate",
             scene.to_str().unwrap(),
@@ -75,7 +60,7 @@ fn with_reader_gone(args: &[String], lines: usize) -> Output {
 
 #[test]
 fn a_closed_pipe_stops_quietly() {
-    let dir = scratch("pipe");
+    let dir = scratch("output_cli_pipe");
     for args in printing_commands(&dir) {
         // Closed before anything is printed, and after the first line of a long output.
         for lines in [0, 1] {
@@ -97,7 +82,7 @@ fn a_closed_pipe_stops_quietly() {
 
 #[test]
 fn a_full_standard_output_is_an_error_naming_it() {
-    let dir = scratch("full");
+    let dir = scratch("output_cli_full");
     for args in printing_commands(&dir) {
         let o = Command::new(env!("CARGO_BIN_EXE_tailor"))
             .args(&args)
@@ -118,7 +103,7 @@ fn a_full_standard_output_is_an_error_naming_it() {
 /// `tailor subdivide` of the cube at level 1 into `out` (`-`: standard output).
 fn subdivide_to(out: &Path) -> Output {
     let o = Command::new(env!("CARGO_BIN_EXE_tailor"))
-        .args(["subdivide", &cube(), "-l", "1", "-o"])
+        .args(["subdivide", &shape("catmark_cube.obj"), "-l", "1", "-o"])
         .arg(out)
         .output()
         .unwrap();
@@ -144,7 +129,7 @@ fn hidden(dir: &Path) -> Vec<String> {
 fn a_device_is_written_in_place() {
     // First a node of our own for the null device, when it can be made (as root), so that
     // a tool replacing it fails here before it could replace the system's `/dev/null`.
-    let dir = scratch("device");
+    let dir = scratch("output_cli_device");
     let own = dir.join("null");
     let made = Command::new("mknod")
         .arg(&own)
@@ -166,7 +151,7 @@ fn a_device_is_written_in_place() {
 
 #[test]
 fn a_symlink_is_followed_and_stays() {
-    let dir = scratch("symlink");
+    let dir = scratch("output_cli_symlink");
     let expected = subdivide_to(Path::new("-")).stdout;
     fs::write(dir.join("real.obj"), "earlier").unwrap();
     symlink("real.obj", dir.join("out.obj")).unwrap();
@@ -195,7 +180,7 @@ fn a_symlink_is_followed_and_stays() {
 
 #[test]
 fn a_fifo_is_written_in_place() {
-    let dir = scratch("fifo");
+    let dir = scratch("output_cli_fifo");
     let fifo = dir.join("fifo");
     let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
     assert!(made.success(), "mkfifo failed");

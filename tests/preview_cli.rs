@@ -5,22 +5,15 @@
 
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-/// A fresh directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("preview_cli_{name}"));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::scratch;
 
+mod common;
+
+/// Runs `tailor preview ARGS`.
 fn tailor(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tailor"))
-        .arg("preview")
-        .args(args)
-        .output()
-        .unwrap()
+    common::tailor(&[&["preview"], args].concat())
 }
 
 fn asset(path: &str) -> PathBuf {
@@ -185,7 +178,7 @@ fn same_bytes_twice() {
 
 #[test]
 fn a_missing_directory_is_a_usage_error() {
-    let dir = scratch("missing");
+    let dir = scratch("preview_cli_missing");
     let png = dir.join("p.png");
     let missing = dir.join("no-such-dir");
     run_fails(
@@ -204,7 +197,7 @@ fn a_missing_directory_is_a_usage_error() {
 
 #[test]
 fn no_frames_or_a_missing_frame_is_an_error_and_writes_nothing() {
-    let empty = scratch("empty");
+    let empty = scratch("preview_cli_empty");
     let png = empty.join("p.png");
     run_fails(
         &[empty.to_str().unwrap(), "-o", png.to_str().unwrap()],

@@ -10,16 +10,13 @@
 
 use std::collections::BTreeMap;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("shipped_shots_{name}"));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::scratch;
+
+mod common;
 
 fn tailor(dir: &Path, args: &[&str]) -> Output {
     let out = Command::new(env!("CARGO_BIN_EXE_tailor"))
@@ -60,7 +57,7 @@ fn assert_clean(dir: &Path, out: &str) {
 
 #[test]
 fn every_frame_of_the_demo_passes_check() {
-    let dir = scratch("demo");
+    let dir = scratch("shipped_shots_demo");
     let run = tailor(&dir, &["demo", "--quiet"]);
     assert!(
         run.status.success(),
@@ -73,7 +70,7 @@ fn every_frame_of_the_demo_passes_check() {
 
 #[test]
 fn every_frame_of_the_skirt_passes_check() {
-    let dir = scratch("skirt");
+    let dir = scratch("shipped_shots_skirt");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/skirt.toml");
     let run = tailor(
         &dir,
@@ -96,7 +93,7 @@ fn every_frame_of_the_skirt_passes_check() {
 
 #[test]
 fn the_cape_killed_at_several_frames_resumes_to_the_same_bytes() {
-    let dir = scratch("cape");
+    let dir = scratch("shipped_shots_cape");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cape.toml");
     let scene = scene.to_str().unwrap();
     let run = tailor(&dir, &["simulate", scene, "--out", "cape", "--quiet"]);

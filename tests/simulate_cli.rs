@@ -24,20 +24,13 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// A fresh directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("simulate_cli_{name}"));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::scratch;
 
+mod common;
+
+/// Runs `tailor simulate ARGS`.
 fn tailor(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tailor"))
-        .arg("simulate")
-        .args(args)
-        .output()
-        .unwrap()
+    common::tailor(&[&["simulate"], args].concat())
 }
 
 /// A closed unit cube `[0, 1]³`, faces counter-clockwise seen from outside, moved by `dx`.
@@ -193,7 +186,7 @@ fn golden(name: &str, produced: &[u8]) {
 
 #[test]
 fn short_shot_matches_golden_with_one_and_two_threads() {
-    let dir = scratch("golden");
+    let dir = scratch("simulate_cli_golden");
     let scene = shot(&dir, &[(FULL.0, FULL.1)]);
     let scene = scene.to_str().unwrap();
     let one = dir.join("one");
@@ -282,7 +275,7 @@ fn rounds_to_f32(name: &str, single: &[u8], full: &[u8]) {
 
 #[test]
 fn default_precision_writes_each_number_as_its_f32() {
-    let dir = scratch("precision");
+    let dir = scratch("simulate_cli_precision");
     let full = dir.join("full");
     // The body a little off the grid of binary fractions, so that its refined points take
     // more digits in full than in single precision, as the cloth's do.
@@ -335,7 +328,7 @@ fn default_precision_writes_each_number_as_its_f32() {
 
 #[test]
 fn stopped_and_resumed_run_writes_the_same_bytes() {
-    let dir = scratch("resume");
+    let dir = scratch("simulate_cli_resume");
     let scene = shot(&dir, &[]);
     let scene = scene.to_str().unwrap();
     let whole = dir.join("whole");
@@ -384,7 +377,7 @@ fn stopped_and_resumed_run_writes_the_same_bytes() {
 
 #[test]
 fn a_finished_shot_extended_by_resuming_equals_the_longer_shot() {
-    let dir = scratch("extend");
+    let dir = scratch("simulate_cli_extend");
     let long = shot(&dir, &[("frames = 10", "frames = 16")]);
     let whole = dir.join("whole");
     run_ok(&[
@@ -495,7 +488,7 @@ fn interrupted_run_stops_after_a_frame_and_resumes() {
 
 #[test]
 fn stale_temporaries_of_its_own_files_are_removed() {
-    let dir = scratch("stale");
+    let dir = scratch("simulate_cli_stale");
     let scene = shot(&dir, &[]);
     let scene = scene.to_str().unwrap();
     let out = dir.join("out");
@@ -538,7 +531,7 @@ fn stale_temporaries_of_its_own_files_are_removed() {
 
 #[test]
 fn a_fresh_run_removes_the_files_of_an_earlier_one() {
-    let dir = scratch("fresh");
+    let dir = scratch("simulate_cli_fresh");
     let scene = shot(&dir, &[]);
     let scene = scene.to_str().unwrap();
     let out = dir.join("out");
@@ -571,7 +564,7 @@ fn a_fresh_run_removes_the_files_of_an_earlier_one() {
 
 #[test]
 fn bad_input_is_refused_before_anything_is_written() {
-    let dir = scratch("bad");
+    let dir = scratch("simulate_cli_bad");
     let scene = shot(&dir, &[]);
     let out_dir = dir.join("out");
     run_ok(&[scene.to_str().unwrap(), "--frames", "..2", "--quiet"]);
@@ -734,7 +727,7 @@ fn summary(dir: &Path) -> serde_json::Value {
 
 #[test]
 fn strained_shot_warns_and_exits_3_only_when_strict() {
-    let dir = scratch("strained");
+    let dir = scratch("simulate_cli_strained");
     let scene = dragged(&dir, 4, &[]);
     let scene = scene.to_str().unwrap();
     let lenient = dir.join("lenient");
@@ -828,7 +821,7 @@ fn strained_shot_warns_and_exits_3_only_when_strict() {
 
 #[test]
 fn clean_shot_warns_of_nothing_and_passes_strict() {
-    let dir = scratch("clean");
+    let dir = scratch("simulate_cli_clean");
     let scene = shot(&dir, &[]);
     let out = tailor(&[scene.to_str().unwrap(), "--strict"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -860,7 +853,7 @@ fn pierced(dir: &Path, frames: u32) -> PathBuf {
 
 #[test]
 fn penetrating_and_crossing_shot_names_the_places() {
-    let dir = scratch("pierced");
+    let dir = scratch("simulate_cli_pierced");
     let scene = pierced(&dir, 2);
     let scene = scene.to_str().unwrap();
     let whole = dir.join("whole");

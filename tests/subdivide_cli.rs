@@ -12,6 +12,10 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
+use common::shape;
+
+mod common;
+
 fn tailor(args: &[&str], stdin: Option<&str>) -> Output {
     let mut child = Command::new(env!("CARGO_BIN_EXE_tailor"))
         .args(args)
@@ -30,14 +34,6 @@ fn tailor(args: &[&str], stdin: Option<&str>) -> Output {
     }
     drop(child.stdin.take());
     child.wait_with_output().unwrap()
-}
-
-fn shape(name: &str) -> String {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    root.join("crates/subdiv/tests/data/opensubdiv/shapes")
-        .join(name)
-        .display()
-        .to_string()
 }
 
 fn scratch(name: &str) -> PathBuf {
