@@ -44,7 +44,7 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use tailor_cloth::energy::Vec3;
+use tailor_cloth::Vec3;
 use tailor_cloth::{Previous, State};
 use tailor_subdiv::Point;
 

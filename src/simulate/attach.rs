@@ -10,7 +10,7 @@
 
 use anyhow::{Context, Result, bail};
 use tailor_cloth::Attachment;
-use tailor_cloth::energy::Vec3;
+use tailor_cloth::Vec3;
 use tailor_collide::Hierarchy;
 use tailor_subdiv::Point;
 

@@ -50,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let lifted: Vec<Point> = fabric
         .positions()
         .iter()
-        .map(|p| p + tailor_cloth::energy::Vec3::y() * thickness)
+        .map(|p| p + tailor_cloth::Vec3::y() * thickness)
         .collect();
     fabric.set_positions(&lifted)?;
     let model = Model::new(&fabric, &material)?;

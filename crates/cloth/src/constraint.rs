@@ -3,7 +3,7 @@
 //! Baraff & Witkin 1998, §5.3: instead of stiff penalty springs, each particle carries a
 //! filter S (zero for a particle whose velocity is prescribed in all three directions,
 //! I − n nᵀ for one held against a plane, I for a free one) and a target velocity z; the
-//! solve leaves the constrained components at z exactly ([`crate::pcg`]). Per substep of
+//! solve leaves the constrained components at z exactly (the private `pcg` module). Per substep of
 //! length h ending at time t, a particle that must be at a goal position g gets
 //! z = (g − x_start)/h and, after the step, is *placed* at g, so pins are exact to the last bit
 //! rather than to a solver tolerance.

@@ -7,7 +7,7 @@
 //!   Y times the area beside the edge (each face gives each of its n edges 2/n of its area), so
 //!   a regular quad grid stretched by ε along a thread stores ½ Y ε² per square metre;
 //! - `shear` (N/m) weights the product E_d by the quad's area (a quartic penalty, see
-//!   [`crate::energy::shear`]);
+//!   the private `energy::shear`);
 //! - `bend` is a bending modulus B (N·m): each thread triple's E_p, which is ½ θ² for a small
 //!   turn θ, is weighted by B times its area over its squared length, so a curvature κ stores
 //!   ½ B κ² per square metre;

@@ -9,7 +9,7 @@
 //! - a **shear** element on every quad, over its two diagonals (eq. 5). Triangles get none:
 //!   their three edge springs already fix their shape. Polygons of five or more sides get none
 //!   either: the paper defines E_d for quads, and garments are modelled in quads;
-//! - a **bend** element on every thread triple ([`crate::threads`], eq. 6–7).
+//! - a **bend** element on every thread triple (the private `threads` module, eq. 6–7).
 //!
 //! Each element's stiffness is the material's modulus times its rest geometry (see
 //! [`crate::material`]) times the mean of its vertices' multipliers for that energy: the paper

@@ -37,7 +37,7 @@
 //!
 //! (U elastic + gravitational energy, D the dissipation function of dampers and drag, damper
 //! directions frozen over the substep: `Work::frozen`), so with `line_search` each step length is halved until Φ
-//! decreases enough (Armijo). Stiffness Hessians are projected to PSD ([`crate::energy`]), so
+//! decreases enough (Armijo). Stiffness Hessians are projected to PSD (the private `energy` module), so
 //! the matrix is SPD, CG converges and every Newton direction descends.
 //!
 //! After the solve, the collision response (the `response` module) applies friction, strain

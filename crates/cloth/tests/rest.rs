@@ -35,7 +35,7 @@
 //! Static friction belongs inside the solve, then, but as something that does not move the
 //! sheet each time a vertex starts to slide.
 
-use tailor_cloth::energy::Vec3;
+use tailor_cloth::Vec3;
 use tailor_cloth::shapes::{cylinder, disc, drape_coefficient};
 use tailor_cloth::{Integrator, Material, Model, Settings, Simulator, State};
 use tailor_subdiv::Point;
