@@ -26,6 +26,32 @@
 //! 1997), so a smooth sheet costs almost nothing. Polygons are fan-triangulated for the exact
 //! tests. Positions are [`Point`]s (nalgebra); parry3d-f64 supplies the triangle projection and
 //! the boxes, and the conversion to its glam types lives in one private module.
+//!
+//! A hierarchy over one square, built once, asked for the nearest point of a query within
+//! a distance, refit after the square moves, and asked again:
+//!
+//! ```
+//! use tailor_collide::{Hierarchy, Point};
+//!
+//! let mut square = [
+//!     Point::new(0.0, 0.0, 0.0),
+//!     Point::new(1.0, 0.0, 0.0),
+//!     Point::new(1.0, 1.0, 0.0),
+//!     Point::new(0.0, 1.0, 0.0),
+//! ];
+//! let mut hierarchy = Hierarchy::build(&square, &[0, 4], &[0, 1, 2, 3])?;
+//! let query = [Point::new(0.25, 0.5, 0.2)];
+//! let near = hierarchy.closest_points(&query, 1.0)?[0].expect("within 1 m");
+//! assert!((near.distance - 0.2).abs() < 1e-12);
+//! for p in &mut square {
+//!     p.z -= 0.3;
+//! }
+//! hierarchy.refit(&square, 0.0)?;
+//! let near = hierarchy.closest_points(&query, 1.0)?[0].expect("within 1 m");
+//! assert!((near.distance - 0.5).abs() < 1e-12);
+//! assert!(hierarchy.closest_points(&query, 0.4)?[0].is_none());
+//! # Ok::<(), tailor_collide::CollideError>(())
+//! ```
 #![warn(missing_docs)]
 
 mod ccd;

@@ -11,6 +11,27 @@
 //!
 //! The control mesh ([`Mesh`]) carries OpenSubdiv's tags (creases, corners, holes) and
 //! [`Options`]; [`obj`] reads and writes it.
+//!
+//! A cube with one infinitely sharp edge, refined once and written back as OBJ:
+//!
+//! ```
+//! use tailor_subdiv::{Refiner, obj};
+//!
+//! let cube = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+//!             f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n\
+//!             t crease 2/1/0 0 1 10\n";
+//! let mesh = obj::parse(cube, "cube.obj")?.mesh;
+//! let refiner = Refiner::new(&mesh, 1);
+//! let refined = refiner.refined_mesh(refiner.refine(mesh.positions()), None);
+//! assert_eq!(refined.face_count(), 6 * 4);
+//! // The sharp edge's point is its midpoint (a smooth edge's would move inwards).
+//! let midpoint = tailor_subdiv::Point::new(0.5, 0.0, 0.0);
+//! assert!(refined.positions().contains(&midpoint));
+//! let mut text = Vec::new();
+//! obj::write(&refined, None, obj::Precision::Single, &mut text)?;
+//! assert!(text.starts_with(b"v "));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 #![warn(missing_docs)]
 
 pub mod conformance;
