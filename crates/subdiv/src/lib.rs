@@ -34,6 +34,7 @@
 //! ```
 #![warn(missing_docs)]
 
+#[cfg(feature = "conformance")]
 pub mod conformance;
 pub mod evaluator;
 pub mod fvar;
