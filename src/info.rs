@@ -37,13 +37,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     writeln!(out, "  edges            {}", level.edge_count())?;
     let sizes = histogram((0..mesh.face_count()).map(|f| mesh.face(f).len()));
     writeln!(out, "  face sizes       {}", format_histogram(&sizes))?;
-    let valences = histogram((0..level.vertex_count).map(|v| level.vert_edges.range(v).len()));
+    let valences = histogram((0..level.vertex_count()).map(|v| level.vert_edges().range(v).len()));
     writeln!(out, "  valences         {}", format_histogram(&valences))?;
     let boundary = (0..level.edge_count())
         .filter(|&e| level.is_boundary_edge(e))
         .count();
-    let nm_edges = level.edge_nonmanifold.iter().filter(|&&n| n).count();
-    let nm_verts = level.vertex_nonmanifold.iter().filter(|&&n| n).count();
+    let nm_edges = level.edge_nonmanifold().iter().filter(|&&n| n).count();
+    let nm_verts = level.vertex_nonmanifold().iter().filter(|&&n| n).count();
     writeln!(out, "  boundary edges   {boundary}")?;
     writeln!(
         out,

@@ -140,11 +140,11 @@ fn boundary_edges(level: &Level) -> usize {
 fn assert_manifold(mesh: &Mesh, name: &str) -> Level {
     let level = Level::from_mesh(mesh);
     assert!(
-        !level.edge_nonmanifold.contains(&true),
+        !level.edge_nonmanifold().contains(&true),
         "{name}: non-manifold edge"
     );
     assert!(
-        !level.vertex_nonmanifold.contains(&true),
+        !level.vertex_nonmanifold().contains(&true),
         "{name}: non-manifold vertex"
     );
     assert!(

@@ -116,11 +116,11 @@ impl Model {
             }
         };
         let mut springs = Springs::default();
-        for (e, &[a, b]) in level.edge_verts.iter().enumerate() {
+        for (e, &[a, b]) in level.edge_verts().iter().enumerate() {
             springs.verts.push([a, b]);
             springs.rest.push(length(a, b)?);
             let beside = level
-                .edge_faces
+                .edge_faces()
                 .row(e)
                 .iter()
                 .map(|&f| 2.0 * face_area[f as usize] / mesh.face(f as usize).len() as f64);
@@ -142,7 +142,7 @@ impl Model {
                 + rest[p2 as usize].coords * coef[1]
                 + rest[p3 as usize].coords * coef[2];
             let edge_area = |a: u32, b: u32| {
-                let edges = level.vert_edges.row(a as usize).iter();
+                let edges = level.vert_edges().row(a as usize).iter();
                 let edge = edges
                     .copied()
                     .find(|&e| level.other_end(e, a) == b)

@@ -17,12 +17,12 @@ use tailor_subdiv::topology::Level;
 #[must_use]
 pub fn triples(level: &Level) -> Vec<[u32; 3]> {
     let mut out = Vec::new();
-    for v in 0..level.vertex_count {
-        if level.vertex_nonmanifold[v] {
+    for v in 0..level.vertex_count() {
+        if level.vertex_nonmanifold()[v] {
             continue;
         }
-        let edges = level.vert_edges.row(v);
-        let faces = level.vert_faces.range(v).len();
+        let edges = level.vert_edges().row(v);
+        let faces = level.vert_faces().range(v).len();
         let n = edges.len();
         let vi = v as u32;
         let mut push = |i: usize, j: usize| {

@@ -90,41 +90,108 @@ impl Csr {
 }
 
 /// One level of a refinement hierarchy.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Level {
     /// Number of vertices.
-    pub vertex_count: usize,
+    pub(crate) vertex_count: usize,
     /// Face → vertices (counter-clockwise loops).
-    pub face_verts: Csr,
+    pub(crate) face_verts: Csr,
     /// Face → edges, parallel to `face_verts`: edge `j` joins corners `j` and `j + 1`.
-    pub face_edges: Vec<u32>,
+    pub(crate) face_edges: Vec<u32>,
     /// Edge → its two vertices.
-    pub edge_verts: Vec<[u32; 2]>,
+    pub(crate) edge_verts: Vec<[u32; 2]>,
     /// Edge → incident faces.
-    pub edge_faces: Csr,
+    pub(crate) edge_faces: Csr,
     /// Position of the edge within each incident face, parallel to `edge_faces.items`.
-    pub edge_face_local: Vec<u16>,
+    pub(crate) edge_face_local: Vec<u16>,
     /// Vertex → incident faces (ordered around manifold vertices).
-    pub vert_faces: Csr,
+    pub(crate) vert_faces: Csr,
     /// Corner index of the vertex within each incident face, parallel to `vert_faces.items`.
-    pub vert_face_local: Vec<u16>,
+    pub(crate) vert_face_local: Vec<u16>,
     /// Vertex → incident edges (ordered around manifold vertices).
-    pub vert_edges: Csr,
+    pub(crate) vert_edges: Csr,
     /// Edge sharpness (0 smooth, ≥ 10 infinite).
-    pub edge_sharpness: Vec<f32>,
+    pub(crate) edge_sharpness: Vec<f32>,
     /// Vertex sharpness.
-    pub vertex_sharpness: Vec<f32>,
+    pub(crate) vertex_sharpness: Vec<f32>,
     /// Non-manifold edges.
-    pub edge_nonmanifold: Vec<bool>,
+    pub(crate) edge_nonmanifold: Vec<bool>,
     /// Non-manifold vertices.
-    pub vertex_nonmanifold: Vec<bool>,
+    pub(crate) vertex_nonmanifold: Vec<bool>,
     /// Hole faces.
-    pub face_hole: Vec<bool>,
+    pub(crate) face_hole: Vec<bool>,
     /// The rule of each vertex.
-    pub vertex_rule: Vec<Rule>,
+    pub(crate) vertex_rule: Vec<Rule>,
 }
 
 impl Level {
+    /// Number of vertices.
+    #[must_use]
+    #[inline]
+    pub fn vertex_count(&self) -> usize {
+        self.vertex_count
+    }
+
+    /// Face → vertices (counter-clockwise loops).
+    #[must_use]
+    pub fn face_verts(&self) -> &Csr {
+        &self.face_verts
+    }
+
+    /// Edge → its two vertices.
+    #[must_use]
+    pub fn edge_verts(&self) -> &[[u32; 2]] {
+        &self.edge_verts
+    }
+
+    /// Edge → incident faces.
+    #[must_use]
+    pub fn edge_faces(&self) -> &Csr {
+        &self.edge_faces
+    }
+
+    /// Vertex → incident faces (ordered around manifold vertices).
+    #[must_use]
+    pub fn vert_faces(&self) -> &Csr {
+        &self.vert_faces
+    }
+
+    /// Vertex → incident edges (ordered around manifold vertices).
+    #[must_use]
+    pub fn vert_edges(&self) -> &Csr {
+        &self.vert_edges
+    }
+
+    /// Edge sharpness (0 smooth, ≥ 10 infinite).
+    #[must_use]
+    pub fn edge_sharpness(&self) -> &[f32] {
+        &self.edge_sharpness
+    }
+
+    /// Vertex sharpness.
+    #[must_use]
+    pub fn vertex_sharpness(&self) -> &[f32] {
+        &self.vertex_sharpness
+    }
+
+    /// Non-manifold edges.
+    #[must_use]
+    pub fn edge_nonmanifold(&self) -> &[bool] {
+        &self.edge_nonmanifold
+    }
+
+    /// Non-manifold vertices.
+    #[must_use]
+    pub fn vertex_nonmanifold(&self) -> &[bool] {
+        &self.vertex_nonmanifold
+    }
+
+    /// Hole faces.
+    #[must_use]
+    pub fn face_hole(&self) -> &[bool] {
+        &self.face_hole
+    }
+
     /// Number of faces.
     #[must_use]
     #[inline]

@@ -116,7 +116,7 @@ fn mode_none_without_seams_matches_vertex_refinement() {
     let expected = refiner.refine(&values);
     assert_eq!(uvs.values.len(), expected.len());
     assert!(uvs.values.iter().zip(&expected).all(|(a, b)| close(*a, *b)));
-    assert_eq!(uvs.indices, refiner.last().face_verts.items);
+    assert_eq!(uvs.indices, refiner.last().face_verts().items);
 }
 
 #[test]
@@ -131,8 +131,8 @@ fn a_seam_refines_each_side_as_a_crease() {
     let right = left + Uv::new(10.0, 0.0);
     let at_centre: Vec<Uv> = (0..level.face_count())
         .flat_map(|f| {
-            let r = level.face_verts.range(f);
-            r.filter(|&c| level.face_verts.items[c] == 4)
+            let r = level.face_verts().range(f);
+            r.filter(|&c| level.face_verts().items[c] == 4)
                 .map(|c| uvs.values[uvs.indices[c] as usize])
                 .collect::<Vec<_>>()
         })
