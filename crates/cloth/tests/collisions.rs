@@ -12,6 +12,10 @@ use tailor_cloth::{Integrator, Material, Model, Motion, Settings, Simulator, Sta
 use tailor_collide::Hierarchy;
 use tailor_subdiv::{Mesh, Point, Refiner};
 
+use common::farthest;
+
+mod common;
+
 const FRAME: f64 = 1.0 / 24.0;
 
 fn hierarchy(mesh: &Mesh) -> Hierarchy {
@@ -131,15 +135,6 @@ fn sheet_drapes_over_a_sphere_without_self_collision() {
 #[test]
 fn sheet_drapes_over_a_sphere_with_self_collision() {
     sheet_drapes_over_a_sphere(32, true);
-}
-
-/// The largest distance between the vertices of two states.
-fn farthest(a: &State, b: &State) -> f64 {
-    a.positions
-        .iter()
-        .zip(&b.positions)
-        .map(|(p, q)| (p - q).norm())
-        .fold(0.0, f64::max)
 }
 
 /// The drape of `n`² with self-collision at 5 substeps a frame, at 24 and at 48 fps (substeps

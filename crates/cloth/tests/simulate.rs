@@ -15,6 +15,10 @@ use tailor_cloth::{
 };
 use tailor_subdiv::Point;
 
+use common::farthest;
+
+mod common;
+
 const FRAME: f64 = 1.0 / 24.0;
 
 /// Material with only stretch (and optional damping): no shear, bend or drag.
@@ -187,15 +191,6 @@ fn contact_planes_hold_the_normal_velocity() {
         assert!(state.velocities[i].y.abs() < 1e-12);
     }
     assert!(state.positions[20].x > sim.model().rest_positions()[20].x + 1e-3);
-}
-
-/// The largest distance between the vertices of two states.
-fn farthest(a: &State, b: &State) -> f64 {
-    a.positions
-        .iter()
-        .zip(&b.positions)
-        .map(|(p, q)| (p - q).norm())
-        .fold(0.0, f64::max)
 }
 
 /// The falling curtain of 10² after `seconds`, in frames of 1/`fps` s and substeps of at most

@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 
-use nalgebra::{Point3, Vector2, Vector3};
+use nalgebra::{Point3, SVector};
 use rayon::prelude::*;
 
 use crate::topology::Csr;
@@ -44,36 +44,17 @@ impl Primvar for f64 {
     }
 }
 
-impl Primvar for Vector2<f64> {
+/// Vectors of any size (UVs, directions): component by component.
+impl<const D: usize> Primvar for SVector<f64, D> {
     #[inline]
     fn zero() -> Self {
         Self::zeros()
     }
     #[inline]
     fn add_scaled(&mut self, other: &Self, w: f64) {
-        self.x += w * other.x;
-        self.y += w * other.y;
-    }
-    #[inline]
-    fn components(&self) -> &[f64] {
-        self.as_slice()
-    }
-    #[inline]
-    fn components_mut(&mut self) -> &mut [f64] {
-        self.as_mut_slice()
-    }
-}
-
-impl Primvar for Vector3<f64> {
-    #[inline]
-    fn zero() -> Self {
-        Self::zeros()
-    }
-    #[inline]
-    fn add_scaled(&mut self, other: &Self, w: f64) {
-        self.x += w * other.x;
-        self.y += w * other.y;
-        self.z += w * other.z;
+        for (a, b) in self.iter_mut().zip(other.iter()) {
+            *a += w * b;
+        }
     }
     #[inline]
     fn components(&self) -> &[f64] {
