@@ -1,4 +1,4 @@
-"""Issue 4's drape in Blender's cloth, for a same-session baseline of `tailor`'s drape example.
+"""The sphere drape in Blender's cloth, the baseline of `tailor`'s drape example, run alternately with it.
 
 A 2 m square sheet of n x n vertices falls 0.5 m onto a sphere of radius 0.5 m (48 segments,
 24 rings: the same sphere as `crates/cloth/src/shapes.rs`), 60 frames at 24 fps, Blender's
