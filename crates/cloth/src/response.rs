@@ -316,8 +316,8 @@ impl Response {
         let lifted = self.collisions.clear_surface(thickness, motion)?;
         if lifted > 0 {
             // Lifting control points strains the edges around them as much as a push
-            // (the cape's edges went from 5% to 11% in one substep); lift again after,
-            // so the collision passes keep the last word.
+            // (on the cape, from 5% to 11% in one substep); lift again after, so the
+            // collision passes keep the last word.
             resolved += self.relax_what_moved(settings, springs, motion)?;
             resolved += self.collisions.clear_surface(thickness, motion)?;
         }
