@@ -4,9 +4,10 @@
 //! to `tailor_checkpoint.bin` in the output directory: positions, velocities and the time
 //! (the `f64` the solver accumulates, so later substeps land on the same instants), the
 //! positions and velocities one substep back with that substep's length (BDF2 steps from
-//! two states: [`tailor_cloth::State::previous`]), the contacts carried into the next step
-//! ([`tailor_cloth::Simulator::carried_contacts`]), the frame number, and the per-frame
-//! figures of the summary so far.
+//! two states: [`tailor_cloth::State::previous`]), what friction carries into the next step
+//! for each vertex's body contact ([`tailor_cloth::ContactState`]: lifted off, sticking, and
+//! the contact's normal force), the frame number, and the per-frame figures of the summary so
+//! far.
 //!
 //! That is all the state, because everything else a step reads is a function of the scene
 //! or is rebuilt within the step: attachment targets and the body's motion are recomputed
@@ -24,7 +25,8 @@
 //! "TAILORCK"  u32 version
 //! u32 keys  keys × (u32 length, UTF-8 name, u64 hash)        the scene's fingerprint
 //! u32 frame  f64 time  u32 vertices
-//! vertices × (3 f64 position)  vertices × (3 f64 velocity)  vertices × (u8 carried contact)
+//! vertices × (3 f64 position)  vertices × (3 f64 velocity)
+//! vertices × (u8 lifted)  vertices × (u8 stuck)  vertices × (f64 normal force)
 //! u8 previous (0 or 1), if 1: f64 step  vertices × (3 f64 position)  vertices × (3 f64 velocity)
 //! u32 rows  rows × (u32 frame, f64 ms, f64 strain, 2 u32 strained edge, u32 substeps, u32 cg,
 //!                   u64 penetrating, f64 deepest, u8 has deepest vertex, [u32 deepest vertex],
@@ -45,7 +47,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use tailor_cloth::Vec3;
-use tailor_cloth::{Previous, State};
+use tailor_cloth::{ContactState, Previous, State};
 use tailor_subdiv::Point;
 
 use crate::check::Findings;
@@ -53,7 +55,7 @@ use crate::output::write_atomically;
 use crate::scene::Fingerprint;
 
 const MAGIC: &[u8; 8] = b"TAILORCK";
-const VERSION: u32 = 5;
+const VERSION: u32 = 6;
 
 /// The checkpoint's file name.
 pub const FILE: &str = "tailor_checkpoint.bin";
@@ -92,8 +94,8 @@ pub struct Checkpoint {
     pub frame: u32,
     /// Positions, velocities and time after it.
     pub state: State,
-    /// The simulator's carried contacts after it, one flag per vertex.
-    pub carried_contacts: Vec<bool>,
+    /// What the simulator's friction carries after it.
+    pub contacts: ContactState,
     /// Figures of every frame so far.
     pub stats: Vec<FrameStats>,
 }
@@ -127,8 +129,13 @@ fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {
         io::Result::Ok(())
     };
     write_motion(w, &c.state.positions, &c.state.velocities)?;
-    let flags: Vec<u8> = c.carried_contacts.iter().map(|&b| u8::from(b)).collect();
-    w.write_all(&flags)?;
+    for flags in [&c.contacts.lifted, &c.contacts.stuck] {
+        let flags: Vec<u8> = flags.iter().map(|&b| u8::from(b)).collect();
+        w.write_all(&flags)?;
+    }
+    for force in &c.contacts.normal_force {
+        w.write_all(&force.to_le_bytes())?;
+    }
     match &c.state.previous {
         None => w.write_all(&[0])?,
         Some(p) => {
@@ -287,7 +294,14 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
     let time = r.f64()?;
     let n = r.u32()? as usize;
     let (positions, velocities) = r.motion(n)?;
-    let carried_contacts = (0..n).map(|_| r.flag()).collect::<Result<_>>()?;
+    let mut flags = || (0..n).map(|_| r.flag()).collect::<Result<Vec<_>>>();
+    let (lifted, stuck) = (flags()?, flags()?);
+    let normal_force = (0..n).map(|_| r.f64()).collect::<Result<_>>()?;
+    let contacts = ContactState {
+        lifted,
+        stuck,
+        normal_force,
+    };
     let previous = if r.flag()? {
         let step = r.f64()?;
         let (positions, velocities) = r.motion(n)?;
@@ -331,7 +345,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
             time,
             previous,
         },
-        carried_contacts,
+        contacts,
         stats,
     })
 }
@@ -358,7 +372,11 @@ mod tests {
                     step: 1.0 / 120.0,
                 }),
             },
-            carried_contacts: vec![true, false],
+            contacts: ContactState {
+                lifted: vec![true, false],
+                stuck: vec![false, true],
+                normal_force: vec![0.0, 2.5e-4],
+            },
             stats: vec![
                 FrameStats {
                     frame: 6,

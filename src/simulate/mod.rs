@@ -204,8 +204,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
     }
     let (mut state, mut stats, next) = match resumed {
         Some(c) => {
-            shot.simulator
-                .restore_carried_contacts(&c.carried_contacts)?;
+            shot.simulator.restore_contact_state(&c.contacts)?;
             (c.state, c.stats, c.frame + 1)
         }
         None => (State::at_rest(shot.simulator.model()), Vec::new(), 0),
@@ -265,7 +264,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
                 fingerprint: scene.fingerprint.clone(),
                 frame,
                 state: state.clone(),
-                carried_contacts: shot.simulator.carried_contacts().to_vec(),
+                contacts: shot.simulator.contact_state().clone(),
                 stats: stats.clone(),
             },
         )?;

@@ -72,6 +72,7 @@ mod strain_limit;
 mod substep;
 mod threads;
 
+pub use collision::ContactState;
 pub use constraint::{Attachment, Contact, Motion};
 pub use energy::Vec3;
 pub use error::{ClothError, StepFailure};

@@ -42,6 +42,8 @@ pub struct Stop {
     /// The norm the tolerance is relative to; `None` for the filtered residual of the
     /// starting guess.
     pub reference: Option<f64>,
+    /// Converged, too, when the filtered residual is at most this, whatever `reference` is.
+    pub floor: f64,
     /// Iterations before the solve counts as failed.
     pub max_iterations: u32,
 }
@@ -99,7 +101,7 @@ impl Pcg {
 
     /// Solves S A S x = S b for the free components of `x`, starting from `x` (whose filtered
     /// part is a warm start and whose constrained part, (I − S) x, is left untouched), until
-    /// |S (b − A x)| ≤ `stop.tolerance` · `stop.reference`, preconditioned as the last
+    /// |S (b − A x)| ≤ `stop.tolerance` · `stop.reference` (or ≤ `stop.floor`), preconditioned as the last
     /// [`Self::prepare`] set up. The reference defaults to the starting residual |S (b − A x₀)|:
     /// the tolerance then bounds the error in what the solve changes, not in the whole of b.
     /// (Relative to |S b|, a substep's velocity update from a warm start at the last velocity
@@ -137,7 +139,7 @@ impl Pcg {
             sums
         });
         let reference = stop.reference.unwrap_or(residual.sqrt());
-        let target = (stop.tolerance * reference).powi(2);
+        let target = (stop.tolerance * reference).max(stop.floor).powi(2);
         let mut rz = 0.0;
         let mut beta = 0.0;
         // The first direction is z itself (β = 0); p is cleared so that nothing a failed
@@ -245,6 +247,7 @@ mod tests {
         let stop = Stop {
             tolerance: 1e-12,
             reference: None,
+            floor: 0.0,
             max_iterations: 500,
         };
         let solve = pcg.solve(&a, &filter, &b, &mut x, stop);

@@ -13,22 +13,24 @@
 //!    closest body point is near enough that, moving on, it would end the substep closer than
 //!    the thickness becomes a contact constraint of the filter ([`crate::constraint`]): the
 //!    plane through the closest point, its normal velocity prescribed to the body's (or to an
-//!    approach that ends exactly at the thickness), the tangential velocity free. A vertex whose
-//!    contact pulled it towards the body in the last substep is released (Baraff & Witkin's
-//!    release rule). **A second look after the solve** ([`Collisions::missed_contacts`]): a
+//!    approach that ends exactly at the thickness), the tangential velocity free, or held too
+//!    when the contact sticks; a sliding contact feels kinetic friction as a force of the
+//!    solve (the `collision::friction` module). A vertex whose contact pulled it towards the
+//!    body stays free until it is within the thickness again (Baraff & Witkin's release
+//!    rule). **A second look after the solve** ([`Collisions::missed_contacts`]): a
 //!    free vertex the solution takes closer than half the thickness to its start's body plane
 //!    (released, or pulled in by the cloth faster than its own velocity foretold) becomes a
 //!    contact too, and the simulator solves the same system again from the last solution.
 //!    Without it the projection of step 5 put such vertices back by up to a centimetre at
 //!    two substeps a frame, straining the edges around them by 15–35%.
-//! 2. **Friction, after the solve** ([`Collisions::friction`]). The constraint impulse j is
-//!    what the linear solve's residual leaves on a contact vertex, b − A Δv (the right-hand
-//!    side the constraint filter kept the solve from meeting there); Coulomb friction
-//!    removes up to μ jₙ / m of the tangential velocity relative to the body (Bridson et al.
-//!    §7.2). Strain is limited next ([`StrainLimiter::limit`]), so friction cannot hold an
-//!    edge stretched; vertices near the body are kept above a floor at three quarters of the
-//!    thickness ([`Collisions::floors`]), so the limiter does not push them in for the
-//!    projection to push back out.
+//! 2. **Coulomb's law on the solve's contact impulses** ([`Collisions::friction`]). The
+//!    constraint impulse j is what the linear solve's residual leaves on a contact vertex,
+//!    b − A Δv (the right-hand side the constraint filter kept the solve from meeting there);
+//!    it decides which contacts stick, slide or let go in the next substep, and a contact that
+//!    starts to stick loses its tangential velocity (velocities only: positions stay the
+//!    solve's). Strain is limited next ([`StrainLimiter::limit`]); vertices near the body are
+//!    kept above a floor at three quarters of the thickness ([`Collisions::floors`]), so the
+//!    limiter does not push them in for the projection to push back out.
 //! 3. **Self repulsion** ([`Collisions::repel`]): for every vertex within the thickness of a
 //!    face of the garment, an impulse that stops the pair approaching and starts separating it
 //!    by a tenth of the overlap per step (Bridson et al. §7.1), except the pairs the rest shape
@@ -61,8 +63,8 @@
 //!    positions steps 5 and 6 left, the vertices they moved a hundred times heavier, and the
 //!    projection once more for what that moved.
 //!
-//! Friction acts on the integrator's own velocities (its impulses are the solve's, and
-//! positions follow as x = x̂ + ĥ v; see the `simulator` module). The other passes (strain
+//! Friction acts in the integrator's own solve (step 2 only changes the velocities of
+//! contacts that start to stick; see the `simulator` module). The other passes (strain
 //! limiting, repulsion, impacts, projection) work on the straight path from x₀ to x₁ and its
 //! velocity u = (x₁ − x₀)/h, as Bridson et al.'s response does; a vertex they leave alone ends
 //! with the integrator's v₁, one they change with the velocity u of its corrected path.
@@ -193,7 +195,7 @@ impl Response {
         h: f64,
         residual: &[Vec3],
     ) -> Result<u32, CollideError> {
-        // Friction first, as a force of the integrator's own step: strain limiting and the
+        // Coulomb's law on the solve's contact impulses first: strain limiting and the
         // collision passes have the last word.
         self.collisions
             .friction(settings, residual, &mut integrator);

@@ -35,13 +35,17 @@
 //!
 //!   Φ(v) = ½ (v − v̂)ᵀ M (v − v̂) + U(x̂ + ĥ v) + ĥ D(v),
 //!
-//! (U elastic + gravitational energy, D the dissipation function of dampers and drag, damper
-//! directions frozen over the substep: `Work::frozen`), so with `line_search` each step length is halved until Φ
-//! decreases enough (Armijo). Stiffness Hessians are projected to PSD (the private `energy` module), so
-//! the matrix is SPD, CG converges and every Newton direction descends.
+//! (U elastic + gravitational energy, with −F · x for the kinetic friction F of sliding body
+//! contacts, constant over the substep; D the dissipation function of dampers and drag, damper
+//! directions frozen over the substep: `Work::frozen`), so with `line_search` each step
+//! length is halved until Φ decreases enough (Armijo). Stiffness Hessians are projected to
+//! PSD (the private `energy` module), so the matrix is SPD, CG converges and every Newton
+//! direction descends. Sticking body contacts are held whole by the filter (see the
+//! `collision::friction` module).
 //!
-//! After the solve, the collision response (the `response` module) applies friction, strain
-//! limiting and the collision passes to the end positions and velocities.
+//! After the solve, the collision response (the `response` module) applies Coulomb's law to
+//! the contacts, strain limiting and the collision passes to the end positions and
+//! velocities.
 //!
 //! The last iteration ends without evaluating the forces again when there is no line search
 //! to decide: friction reads the contact impulses of the solve itself, b − A Δv on the contact
@@ -59,6 +63,7 @@ use tailor_collide::CollideError;
 use tailor_subdiv::{Point, StencilTable};
 
 use crate::assemble::{Assembly, Coefficients};
+use crate::collision::ContactState;
 use crate::constraint::{Attachment, Constraints, Contact, Filter, Motion};
 use crate::energy::{Mat3, Vec3};
 use crate::pcg::{Pcg, Stop};
@@ -95,6 +100,14 @@ impl From<CollideError> for SubstepError {
         }
     }
 }
+
+/// The velocity error, m/s, below which a solve has converged whatever its relative
+/// tolerance asks: the filtered residual |S (b − A Δv)| at most this times |M 1|, what this
+/// error in every vertex's velocity leaves. Cloth at rest starts each solve a round-off away
+/// from its answer, and a tolerance relative to that asked CG for hundreds of iterations a
+/// substep that changed nothing a viewer sees. A micrometre a second is a ten-thousandth of
+/// what gravity adds in a substep of 1/1200 s, so free fall keeps its accuracy at fine steps.
+const VELOCITY_FLOOR: f64 = 1e-6;
 
 /// Most times a substep's linear system is solved again with the body contacts its last
 /// solution revealed.
@@ -228,6 +241,8 @@ pub struct Simulator {
     pcg: Pcg,
     response: Response,
     work: Work,
+    /// [`VELOCITY_FLOOR`] as a residual: times |M 1|, the masses' Euclidean norm.
+    residual_floor: f64,
 }
 
 impl Work {
@@ -289,6 +304,7 @@ impl Simulator {
             settings.project_hessians,
         );
         Ok(Self {
+            residual_floor: VELOCITY_FLOOR * model.mass.iter().map(|m| m * m).sum::<f64>().sqrt(),
             response: Response::new(&model, &settings)?,
             constraints: Constraints::new(n),
             pcg: Pcg::new(&assembly.matrix),
@@ -402,28 +418,29 @@ impl Simulator {
         Ok(())
     }
 
-    /// The only collision state carried from one step to the next: which vertices' body
-    /// contacts pulled them towards the body in the last substep (those are released in the
-    /// next). A checkpoint must keep it for a resumed run to compute the same bits.
+    /// The only collision state carried from one step to the next: what friction keeps of
+    /// each vertex's body contact (see [`ContactState`]). A checkpoint must keep it for a
+    /// resumed run to compute the same bits.
     #[must_use]
-    pub fn carried_contacts(&self) -> &[bool] {
-        self.response.collisions().pulling()
+    pub fn contact_state(&self) -> &ContactState {
+        self.response.collisions().contact_state()
     }
 
-    /// Restores [`Self::carried_contacts`] from a checkpoint.
+    /// Restores [`Self::contact_state`] from a checkpoint.
     ///
     /// # Errors
-    /// [`ClothError::WrongLength`] when `flags` does not have one entry per vertex.
-    pub fn restore_carried_contacts(&mut self, flags: &[bool]) -> Result<(), ClothError> {
-        let expected = self.response.collisions().pulling().len();
-        if flags.len() != expected {
+    /// [`ClothError::WrongLength`] when `state` does not have one entry per vertex in each
+    /// of its tables.
+    pub fn restore_contact_state(&mut self, state: &ContactState) -> Result<(), ClothError> {
+        let expected = self.model.vertex_count();
+        if state.len() != expected || !state.is_consistent() {
             return Err(ClothError::WrongLength {
-                what: "carried contacts",
-                given: flags.len(),
+                what: "contact state",
+                given: state.len(),
                 expected,
             });
         }
-        self.response.collisions_mut().set_pulling(flags);
+        self.response.collisions_mut().set_contact_state(state);
         Ok(())
     }
 
@@ -559,11 +576,15 @@ impl Simulator {
         );
         let mass = &self.model.mass;
         let force = &self.assembly.force;
+        // Kinetic friction is a constant force over the substep: its potential is −F · x,
+        // and x = x̂ + ĥ v.
+        let friction = self.response.collisions().friction_force();
         for (i, r) in rhs.iter_mut().enumerate() {
-            *r = (base_velocity[i] - trial[i]) * mass[i] + force[i] * h;
+            *r = (base_velocity[i] - trial[i]) * mass[i] + (force[i] + friction[i]) * h;
         }
         let inertia = sum_by(mass.len(), partials, |i| {
             0.5 * mass[i] * (trial[i] - base_velocity[i]).norm_squared()
+                - h * friction[i].dot(&trial[i])
         });
         inertia + totals.potential + h * totals.dissipation
     }
@@ -674,6 +695,7 @@ impl Simulator {
             self.response.collisions().contacts(),
             &mut w.filter,
         );
+        self.response.collisions().stick(&mut w.filter);
     }
 
     /// Solves the filtered system for `work.delta`, from its value, and returns the norm its
@@ -696,6 +718,7 @@ impl Simulator {
             Stop {
                 tolerance: self.settings.cg_tolerance,
                 reference,
+                floor: self.residual_floor,
                 max_iterations: self.settings.cg_max_iterations,
             },
         );
@@ -717,9 +740,14 @@ impl Simulator {
         let w = &mut self.work;
         w.x0.copy_from_slice(&state.positions);
         w.v0.copy_from_slice(&state.velocities);
-        self.response
-            .collisions_mut()
-            .before_solve(&self.settings, state.time, h, &w.x0, &w.v0)?;
+        self.response.collisions_mut().before_solve(
+            &self.settings,
+            state.time,
+            h,
+            &w.x0,
+            &w.v0,
+            &self.model.mass,
+        )?;
         self.prepare_filter(t1, h);
         self.prepare_base(h, state.previous.as_ref());
         let w = &mut self.work;

@@ -417,12 +417,12 @@ fn a_restarted_simulator_computes_the_same_bits() {
     let mut saved = Vec::new();
     for _ in 0..36 {
         whole.step(&mut state, FRAME).unwrap();
-        saved.push((state.clone(), whole.carried_contacts().to_vec()));
+        saved.push((state.clone(), whole.contact_state().clone()));
     }
     for restart in [5, 17, 30] {
         let (mut sim, _) = make();
         let (mut resumed, carried) = saved[restart - 1].clone();
-        sim.restore_carried_contacts(&carried).unwrap();
+        sim.restore_contact_state(&carried).unwrap();
         for (frame, (expected, _)) in saved.iter().enumerate().skip(restart) {
             sim.step(&mut resumed, FRAME).unwrap();
             assert!(

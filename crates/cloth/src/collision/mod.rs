@@ -15,10 +15,13 @@
 //! applied one after another in the sorted order the hierarchy reports, so results do not
 //! depend on the thread count. Pinned and attached vertices have infinite mass here.
 
+mod friction;
 mod obstacle;
 mod self_collision;
 mod surface;
 
+pub use friction::ContactState;
+use friction::Friction;
 use obstacle::Obstacle;
 use surface::Surface;
 
@@ -41,8 +44,8 @@ pub(crate) struct Collisions {
     cloth: Hierarchy,
     /// The body contacts of the current substep.
     contacts: Vec<Contact>,
-    /// Vertices whose contact pulled them towards the body in the last substep.
-    pulling: Vec<bool>,
+    /// Friction on the body contacts, and what it carries between substeps.
+    friction: Friction,
     /// The self-collision queries' answers, reused.
     layers: self_collision::Buffers,
 }
@@ -63,7 +66,7 @@ impl Collisions {
             surface: None,
             cloth,
             contacts: Vec::new(),
-            pulling: vec![false; n],
+            friction: Friction::new(n),
             layers,
         })
     }
@@ -109,17 +112,28 @@ impl Collisions {
         &self.contacts
     }
 
-    /// Vertices whose contact pulled them towards the body in the last substep.
-    pub fn pulling(&self) -> &[bool] {
-        &self.pulling
+    /// What friction carries from one substep to the next.
+    pub fn contact_state(&self) -> &ContactState {
+        &self.friction.state
     }
 
-    /// Restores [`Self::pulling`] (from a checkpoint).
-    pub fn set_pulling(&mut self, flags: &[bool]) {
-        self.pulling.copy_from_slice(flags);
+    /// Restores [`Self::contact_state`] (from a checkpoint).
+    pub fn set_contact_state(&mut self, state: &ContactState) {
+        self.friction.state.clone_from(state);
     }
 
-    /// Finds the body contacts for the substep of length `h` from time `t0`.
+    /// The kinetic friction forces of the current substep, which the solve includes.
+    pub fn friction_force(&self) -> &[Vec3] {
+        self.friction.force()
+    }
+
+    /// Holds the sticking contacts' whole velocity in `filter`.
+    pub fn stick(&self, filter: &mut Filter) {
+        self.friction.stick(&self.contacts, filter);
+    }
+
+    /// Finds the body contacts for the substep of length `h` from time `t0`, and which of
+    /// them stick and which slide under what friction force (vertex masses `mass`).
     pub fn before_solve(
         &mut self,
         settings: &Settings,
@@ -127,12 +141,17 @@ impl Collisions {
         h: f64,
         x0: &[Point],
         v0: &[Vec3],
+        mass: &[f64],
     ) -> Result<(), CollideError> {
         self.contacts.clear();
         if let Some(obstacle) = &mut self.obstacle {
             obstacle.begin_substep(t0, h);
-            obstacle.find_contacts(settings, h, x0, v0, &self.pulling, &mut self.contacts)?;
+            let lifted = &mut self.friction.state.lifted;
+            obstacle.find_contacts(settings, h, x0, v0, lifted, &mut self.contacts)?;
         }
+        let (gravity, mu) = (settings.gravity, settings.friction);
+        self.friction
+            .prepare(&self.contacts, v0, mass, gravity, mu, h);
         Ok(())
     }
 
@@ -161,18 +180,12 @@ impl Collisions {
         }
     }
 
-    /// Coulomb friction on the body contacts (step 2 of [`crate::response`]); `residual` is the
-    /// linear solve's b − A Δv, M (v₀ − v) + h f at the end of the solve linearized.
+    /// Coulomb friction on the body contacts after the solve (step 2 of [`crate::response`],
+    /// see the `friction` module); `residual` is the linear solve's b − A Δv,
+    /// M (v̂ − v) + ĥ f at the end of the solve linearized.
     pub fn friction(&mut self, settings: &Settings, residual: &[Vec3], motion: &mut Substep) {
-        if self.obstacle.is_some() {
-            obstacle::friction(
-                &self.contacts,
-                residual,
-                settings.friction,
-                motion,
-                &mut self.pulling,
-            );
-        }
+        self.friction
+            .after_solve(&self.contacts, residual, settings.friction, motion);
     }
 
     /// Self repulsion (step 3 of [`crate::response`]) on `motion`; `moved` flags the vertices
