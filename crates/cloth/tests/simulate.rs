@@ -10,16 +10,14 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use tailor_cloth::shapes::{sheet, sphere};
 use tailor_cloth::{
-    Attachment, ClothError, Contact, Integrator, Material, Model, Motion, Settings, Simulator,
-    State, StepFailure,
+    Attachment, ClothError, Contact, Integrator, Material, Motion, Settings, Simulator, State,
+    StepFailure,
 };
 use tailor_subdiv::Point;
 
-use common::farthest;
+use common::{FRAME, farthest, set_obstacle, simulator};
 
 mod common;
-
-const FRAME: f64 = 1.0 / 24.0;
 
 /// Material with only stretch (and optional damping): no shear, bend or drag.
 fn springs_only(stretch: f64, damping: f64) -> Material {
@@ -36,10 +34,8 @@ fn springs_only(stretch: f64, damping: f64) -> Material {
 
 /// An n × n curtain of 1 m, pinned at the two corners of its first row, falling from flat.
 fn curtain(n: u32, settings: Settings) -> (Simulator, State) {
-    let model = Model::new(&sheet(n, n, 1.0, 1.0), &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, settings).unwrap();
+    let (mut sim, state) = simulator(&sheet(n, n, 1.0, 1.0), &Material::COTTON, settings);
     sim.pin(&[0, n - 1], Motion::Fixed).unwrap();
-    let state = State::at_rest(sim.model());
     (sim, state)
 }
 
@@ -48,21 +44,16 @@ fn hanging_strip_settles_at_the_analytic_stretch() {
     // Two columns of 11 vertices, 0.1 m apart, hanging along −z from the top row.
     let (rows, spacing, width) = (11u32, 0.1, 0.1);
     let material = springs_only(50.0, 0.02);
-    let model = Model::new(
-        &sheet(2, rows, width, spacing * f64::from(rows - 1)),
-        &material,
-    )
-    .unwrap();
+    let strip = sheet(2, rows, width, spacing * f64::from(rows - 1));
     let g = 9.81;
     let settings = Settings {
         gravity: Vector3::new(0.0, 0.0, -g),
         cg_tolerance: 1e-10,
         ..Settings::default()
     };
-    let mut sim = Simulator::new(model, settings).unwrap();
+    let (mut sim, mut state) = simulator(&strip, &material, settings);
     sim.pin(&[2 * (rows - 1), 2 * (rows - 1) + 1], Motion::Fixed)
         .unwrap();
-    let mut state = State::at_rest(sim.model());
     for _ in 0..240 {
         sim.step(&mut state, FRAME).unwrap();
     }
@@ -91,14 +82,13 @@ fn hanging_strip_settles_at_the_analytic_stretch() {
 
 #[test]
 fn undamped_symplectic_steps_conserve_energy() {
-    let model = Model::new(&sheet(6, 6, 1.0, 1.0), &springs_only(100.0, 0.0)).unwrap();
     let settings = Settings {
         max_substep: 2e-4,
         gravity: Vector3::zeros(),
         ..Settings::default()
     };
-    let mut sim = Simulator::new(model, settings).unwrap();
-    let mut state = State::at_rest(sim.model());
+    let (mut sim, mut state) =
+        simulator(&sheet(6, 6, 1.0, 1.0), &springs_only(100.0, 0.0), settings);
     for (i, (p, v)) in state
         .positions
         .iter_mut()
@@ -118,10 +108,12 @@ fn undamped_symplectic_steps_conserve_energy() {
 
 #[test]
 fn damped_implicit_steps_lose_energy_monotonically() {
-    let model = Model::new(&sheet(9, 9, 1.0, 1.0), &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, Settings::default()).unwrap();
+    let (mut sim, mut state) = simulator(
+        &sheet(9, 9, 1.0, 1.0),
+        &Material::COTTON,
+        Settings::default(),
+    );
     sim.pin(&[0, 8], Motion::Fixed).unwrap();
-    let mut state = State::at_rest(sim.model());
     let mut last = sim.energy(&state);
     for frame in 0..48 {
         sim.step(&mut state, FRAME).unwrap();
@@ -306,14 +298,12 @@ fn an_impossible_solve_is_a_typed_error_not_nan() {
 /// at 24 fps in `substeps` implicit steps a frame; returns the mean drop and the mean
 /// vertical velocity at the end.
 fn fall(material: &Material, integrator: Integrator, substeps: u32, seconds: f64) -> (f64, f64) {
-    let model = Model::new(&sheet(5, 5, 0.1, 0.1), material).unwrap();
     let settings = Settings {
         max_substep: FRAME / f64::from(substeps),
         integrator,
         ..Settings::default()
     };
-    let mut sim = Simulator::new(model, settings).unwrap();
-    let mut state = State::at_rest(sim.model());
+    let (mut sim, mut state) = simulator(&sheet(5, 5, 0.1, 0.1), material, settings);
     let frames = (seconds / FRAME).round() as u32;
     for _ in 0..frames {
         sim.step(&mut state, FRAME).unwrap();
@@ -409,8 +399,7 @@ fn a_restarted_simulator_computes_the_same_bits() {
         };
         let (mut sim, state) = curtain(12, settings);
         let ball = sphere(Point::new(0.5, -0.45, 0.5), 0.3, 12, 24);
-        sim.set_obstacle(ball.positions(), ball.face_offsets(), ball.face_vertices())
-            .unwrap();
+        set_obstacle(&mut sim, &ball);
         (sim, state)
     };
     let (mut whole, mut state) = make();
