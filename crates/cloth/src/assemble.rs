@@ -29,10 +29,10 @@
 
 use rayon::prelude::*;
 use tailor_subdiv::Point;
-use tailor_subdiv::topology::Csr;
+use tailor_subdiv::csr::Csr;
 
 use crate::energy::{self, Local, Mat3, Vec3};
-use crate::matrix::{BlockMatrix, csr_from_sorted};
+use crate::matrix::BlockMatrix;
 use crate::model::Model;
 use crate::reduce::{partial_count, sum_by};
 
@@ -96,9 +96,9 @@ impl Gather {
     /// From (output, slot, weight) triples, in output then slot order.
     fn new(outputs: usize, mut triples: Vec<(u32, u32, f64)>) -> Self {
         triples.sort_unstable_by_key(|&(out, slot, _)| (out, slot));
-        let pairs: Vec<(u32, u32)> = triples.iter().map(|&(out, slot, _)| (out, slot)).collect();
+        let pairs = triples.iter().map(|&(out, slot, _)| (out, slot));
         Self {
-            sources: csr_from_sorted(outputs, &pairs),
+            sources: Csr::group_by(outputs, pairs),
             weights: triples.iter().map(|&(_, _, w)| w).collect(),
         }
     }

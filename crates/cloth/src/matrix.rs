@@ -24,7 +24,7 @@
 
 use nalgebra::Matrix3;
 use rayon::prelude::*;
-use tailor_subdiv::topology::Csr;
+use tailor_subdiv::csr::Csr;
 
 use crate::energy::{Mat3, Vec3};
 use crate::reduce::CHUNK;
@@ -90,7 +90,7 @@ impl<T: Precision> BlockMatrix<T> {
         }
         all.sort_unstable();
         all.dedup();
-        let pattern = csr_from_sorted(n, &all);
+        let pattern = Csr::group_by(n, all.iter().copied());
         let mirrored = |&(i, j): &(u32, u32)| symmetric && j < i;
         let slot_of: Vec<u32> = (0..all.len() as u32)
             .filter(|&s| !mirrored(&all[s as usize]))
@@ -303,21 +303,6 @@ fn tr_mul<T: Precision>(b: &Matrix3<T>, x: &Vec3) -> Vec3 {
         c(3) * x[0] + c(4) * x[1] + c(5) * x[2],
         c(6) * x[0] + c(7) * x[1] + c(8) * x[2],
     )
-}
-
-/// A CSR table of `rows` rows from (row, item) pairs sorted by row.
-pub(crate) fn csr_from_sorted(rows: usize, pairs: &[(u32, u32)]) -> Csr {
-    let mut offsets = vec![0u32; rows + 1];
-    for &(r, _) in pairs {
-        offsets[r as usize + 1] += 1;
-    }
-    for r in 0..rows {
-        offsets[r + 1] += offsets[r];
-    }
-    Csr {
-        offsets,
-        items: pairs.iter().map(|&(_, item)| item).collect(),
-    }
 }
 
 #[cfg(test)]

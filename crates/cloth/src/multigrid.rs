@@ -44,10 +44,10 @@
 
 use nalgebra::{DMatrix, DVector, Dyn, linalg::Cholesky};
 use rayon::prelude::*;
-use tailor_subdiv::topology::Csr;
+use tailor_subdiv::csr::Csr;
 
 use crate::energy::{Mat3, Vec3};
-use crate::matrix::{BlockMatrix, Precision, csr_from_sorted};
+use crate::matrix::{BlockMatrix, Precision};
 use crate::reduce::CHUNK;
 
 /// Relative size of a coupling that [`aggregate`] follows (the 64² drape in contact: 0 takes
@@ -177,12 +177,9 @@ impl Level {
                 (slot - matrix.row_range(i as usize).start) as u32
             })
             .collect();
-        let mut members: Vec<(u32, u32)> = (0..parent.len() as u32)
-            .map(|i| (parent[i as usize], i))
-            .collect();
-        members.sort_unstable();
+        let members = parent.iter().enumerate().map(|(i, &p)| (p, i as u32));
         Self {
-            members: csr_from_sorted(count, &members),
+            members: Csr::group_by(count, members),
             target,
             inverse_diagonal: vec![Mat3::identity(); count],
             r: vec![Vec3::zeros(); count],

@@ -38,9 +38,10 @@
 //! (U elastic + gravitational energy, with −F · x for the kinetic friction F of sliding body
 //! contacts, constant over the substep; D the dissipation function of dampers and drag, damper
 //! directions frozen over the substep: `Work::frozen`), so with `line_search` each step
-//! length is halved until Φ decreases enough (Armijo). Stiffness Hessians are projected to
-//! PSD (the private `energy` module), so the matrix is SPD, CG converges and every Newton
-//! direction descends. Sticking body contacts are held whole by the filter (see the
+//! length is halved until Φ decreases enough (Armijo); [`StepReport`] counts the halvings,
+//! and the steps taken without that decrease. Stiffness Hessians are projected to PSD (the
+//! private `energy` module), so the matrix is SPD, CG converges and every Newton direction
+//! descends. Sticking body contacts are held whole by the filter (see the
 //! `collision::friction` module).
 //!
 //! After the solve, the collision response (the `response` module) applies Coulomb's law to
@@ -200,6 +201,16 @@ pub struct StepReport {
     pub impacts: u32,
     /// Edge corrections strain limiting made over all substeps.
     pub strain_corrections: u32,
+    /// Times the line search ([`Settings::line_search`]) halved a Newton step, over all
+    /// substeps: each time, the longer step would not have decreased the incremental
+    /// potential Φ as much as Armijo's condition asks (see the module docs).
+    pub line_search_halvings: u32,
+    /// Newton steps taken, over all substeps, that did not decrease Φ as much as Armijo's
+    /// condition asks. With the line search these are the steps it gave up on (at its
+    /// shortest step, or where Φ is not finite), so 0 means that every step taken decreased
+    /// Φ; without it, every step whose Φ is evaluated counts: all but the last of each
+    /// substep.
+    pub insufficient_decreases: u32,
 }
 
 /// Buffers of one substep.
@@ -794,9 +805,11 @@ impl Simulator {
                 let next = self.evaluate(!last);
                 let enough = next <= at - ARMIJO * alpha * slope;
                 if !self.settings.line_search || enough || alpha < MIN_STEP || !next.is_finite() {
+                    report.insufficient_decreases += u32::from(!enough);
                     at = next;
                     break;
                 }
+                report.line_search_halvings += 1;
                 alpha *= 0.5;
             }
         }

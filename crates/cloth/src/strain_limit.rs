@@ -24,6 +24,8 @@
 //! collision pass, [`StrainLimiter::limit_around`] runs the same sweeps with the vertices the
 //! pass moved a hundred times heavier, so the cloth around them takes up the strain.
 
+use tailor_subdiv::csr::{Csr, group_into};
+
 use crate::model::Springs;
 use crate::substep::{Floor, HELD_MASS, Substep};
 
@@ -42,9 +44,8 @@ const UNREACHED: u32 = u32::MAX;
 /// per-substep order of the edges.
 #[derive(Clone, Debug)]
 pub(crate) struct StrainLimiter {
-    /// Edges at each vertex, CSR.
-    offsets: Vec<u32>,
-    incident: Vec<u32>,
+    /// Edges at each vertex.
+    incident: Csr,
     /// Edges by breadth-first depth from the sources, then the unreached ones.
     order: Vec<u32>,
     depth: Vec<u32>,
@@ -53,38 +54,24 @@ pub(crate) struct StrainLimiter {
     sources: Vec<bool>,
     /// The inverse masses of [`Self::limit_around`].
     weights: Vec<f64>,
-    /// The breadth-first queue and the counting sort's bucket starts of [`Self::order_from`].
+    /// The breadth-first queue of [`Self::order_from`], and the row starts of its grouping
+    /// of the edges by depth.
     queue: Vec<u32>,
     starts: Vec<u32>,
 }
 
 impl StrainLimiter {
     pub fn new(springs: &Springs, vertex_count: usize) -> Self {
-        let mut offsets = vec![0u32; vertex_count + 1];
-        for &[a, b] in &springs.verts {
-            offsets[a as usize + 1] += 1;
-            offsets[b as usize + 1] += 1;
-        }
-        for i in 0..vertex_count {
-            offsets[i + 1] += offsets[i];
-        }
-        let mut fill = offsets.clone();
-        let mut incident = vec![0u32; offsets[vertex_count] as usize];
-        for (e, &[a, b]) in springs.verts.iter().enumerate() {
-            for v in [a, b] {
-                incident[fill[v as usize] as usize] = e as u32;
-                fill[v as usize] += 1;
-            }
-        }
+        let ends = springs.verts.iter().enumerate();
+        let incident = ends.flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]);
         Self {
-            offsets,
-            incident,
+            incident: Csr::group_by(vertex_count, incident),
             order: (0..springs.verts.len() as u32).collect(),
             depth: vec![UNREACHED; vertex_count],
             sources: vec![false; vertex_count],
             weights: Vec::with_capacity(vertex_count),
             queue: Vec::with_capacity(vertex_count),
-            starts: Vec::with_capacity(vertex_count + 2),
+            starts: Vec::with_capacity(vertex_count + 3),
         }
     }
 
@@ -110,8 +97,7 @@ impl StrainLimiter {
         while head < queue.len() {
             let v = queue[head] as usize;
             head += 1;
-            let row = self.offsets[v] as usize..self.offsets[v + 1] as usize;
-            for &e in &self.incident[row] {
+            for &e in self.incident.row(v) {
                 let [a, b] = springs.verts[e as usize];
                 let other = if a as usize == v { b } else { a } as usize;
                 if self.depth[other] == UNREACHED {
@@ -120,28 +106,13 @@ impl StrainLimiter {
                 }
             }
         }
-        // Edges by the depth of their nearer end, stably (a counting sort; the unreached last).
+        // Edges by the depth of their nearer end, stably (the unreached last, at depth n).
         let depth = &self.depth;
-        let key = |e: usize| {
-            let [a, b] = springs.verts[e];
+        let by_depth = springs.verts.iter().enumerate().map(|(e, &[a, b])| {
             let d = depth[a as usize].min(depth[b as usize]);
-            if d == UNREACHED { n } else { d as usize }
-        };
-        let starts = &mut self.starts;
-        starts.clear();
-        starts.resize(n + 2, 0);
-        for e in 0..springs.verts.len() {
-            starts[key(e) + 1] += 1;
-        }
-        for k in 0..=n {
-            starts[k + 1] += starts[k];
-        }
-        self.order.resize(springs.verts.len(), 0);
-        for e in 0..springs.verts.len() {
-            let k = key(e);
-            self.order[starts[k] as usize] = e as u32;
-            starts[k] += 1;
-        }
+            (if d == UNREACHED { n as u32 } else { d }, e as u32)
+        });
+        group_into(n + 1, by_depth, &mut self.starts, &mut self.order);
     }
 
     /// Brings every edge of `springs` within `limit` (a fraction, e.g. 0.1) of its rest

@@ -8,18 +8,24 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use tailor_cloth::shapes::{block, centred_sheet, sheet, sphere};
-use tailor_cloth::{Integrator, Material, Model, Motion, Settings, Simulator, State};
+use tailor_cloth::{Integrator, Material, Motion, Settings, Simulator, State};
 use tailor_collide::Hierarchy;
 use tailor_subdiv::{Mesh, Point, Refiner};
 
-use common::farthest;
+use common::{FRAME, farthest, moved, set_obstacle, simulator};
 
 mod common;
 
-const FRAME: f64 = 1.0 / 24.0;
-
 fn hierarchy(mesh: &Mesh) -> Hierarchy {
     Hierarchy::build(mesh.positions(), mesh.face_offsets(), mesh.face_vertices()).unwrap()
+}
+
+/// The smallest signed distance of `points` from the surface of `h` (at its last refit).
+fn nearest(h: &Hierarchy, points: &[Point]) -> f64 {
+    h.signed_distances(points)
+        .unwrap()
+        .into_iter()
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// The checks of every frame, with the obstacle (if any) where it is; crossings only with
@@ -64,11 +70,7 @@ impl Checker {
         }
         if let (Some(h), Some(at)) = (&mut self.obstacle, obstacle_at) {
             h.refit(at, 0.0).unwrap();
-            let nearest = h
-                .signed_distances(p)
-                .unwrap()
-                .into_iter()
-                .fold(f64::INFINITY, f64::min);
+            let nearest = nearest(h, p);
             assert!(
                 nearest >= 0.5 * self.thickness,
                 "frame {frame}: a vertex is {nearest} m from the obstacle"
@@ -82,11 +84,8 @@ impl Checker {
 fn drape(n: u32, fps: f64, frames: u32, settings: Settings, check: bool) -> (State, Simulator) {
     let garment = centred_sheet(n, 2.0);
     let ball = sphere(Point::new(0.0, -1.0, 0.0), 0.5, 12, 24);
-    let model = Model::new(&garment, &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, settings).unwrap();
-    sim.set_obstacle(ball.positions(), ball.face_offsets(), ball.face_vertices())
-        .unwrap();
-    let mut state = State::at_rest(sim.model());
+    let (mut sim, mut state) = simulator(&garment, &Material::COTTON, settings);
+    set_obstacle(&mut sim, &ball);
     let mut checker = Checker::new(&garment, Some(&ball), &settings);
     for frame in 0..frames {
         sim.step(&mut state, 1.0 / fps).unwrap();
@@ -182,10 +181,8 @@ fn curtain_pinned_at_two_corners_keeps_its_invariants() {
         self_collision: true,
         ..Settings::default()
     };
-    let model = Model::new(&garment, &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, settings).unwrap();
+    let (mut sim, mut state) = simulator(&garment, &Material::COTTON, settings);
     sim.pin(&[0, n - 1], Motion::Fixed).unwrap();
-    let mut state = State::at_rest(sim.model());
     let mut checker = Checker::new(&garment, None, &settings);
     for frame in 0..36 {
         sim.step(&mut state, FRAME).unwrap();
@@ -207,22 +204,15 @@ fn slide_on_incline(slope: f64, mu: f64, frames: u32) -> (f64, f64, f64) {
         ..Settings::default()
     };
     let lift = Vector3::new(0.0, settings.thickness, 0.0);
-    let mut garment = centred_sheet(6, 0.3);
-    let lifted: Vec<Point> = garment.positions().iter().map(|p| p + lift).collect();
-    garment.set_positions(&lifted).unwrap();
+    let garment = moved(&centred_sheet(6, 0.3), lift);
+    let lifted = garment.positions();
     let material = Material {
         drag: 0.0,
         ..Material::COTTON
     };
-    let mut sim = Simulator::new(Model::new(&garment, &material).unwrap(), settings).unwrap();
+    let (mut sim, mut state) = simulator(&garment, &material, settings);
     let floor = block(Point::new(-5.0, -1.0, -5.0), Point::new(5.0, 0.0, 5.0));
-    sim.set_obstacle(
-        floor.positions(),
-        floor.face_offsets(),
-        floor.face_vertices(),
-    )
-    .unwrap();
-    let mut state = State::at_rest(sim.model());
+    set_obstacle(&mut sim, &floor);
     for _ in 0..frames {
         sim.step(&mut state, FRAME).unwrap();
     }
@@ -231,7 +221,7 @@ fn slide_on_incline(slope: f64, mu: f64, frames: u32) -> (f64, f64, f64) {
     let moved = state
         .positions
         .iter()
-        .zip(&lifted)
+        .zip(lifted)
         .map(|(p, q)| p.x - q.x)
         .sum::<f64>()
         / count;
@@ -272,23 +262,15 @@ fn sheet_folds_onto_itself_without_crossing() {
     // A 2 m × 1 m strip lying on a floor; its far edge is carried over a fold line at x = 0
     // and laid down 4 cm above the near half, so the middle must fold onto the lower layer.
     let (columns, rows) = (24, 8);
-    let mut garment = sheet(columns, rows, 2.0, 1.0);
     let settings = Settings {
         self_collision: true,
         ..Settings::default()
     };
     let lift = Vector3::new(-1.0, settings.thickness, 0.0);
-    let moved: Vec<Point> = garment.positions().iter().map(|p| p + lift).collect();
-    garment.set_positions(&moved).unwrap();
+    let garment = moved(&sheet(columns, rows, 2.0, 1.0), lift);
     let floor = block(Point::new(-2.0, -0.5, -1.0), Point::new(2.0, 0.0, 2.0));
-    let model = Model::new(&garment, &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, settings).unwrap();
-    sim.set_obstacle(
-        floor.positions(),
-        floor.face_offsets(),
-        floor.face_vertices(),
-    )
-    .unwrap();
+    let (mut sim, mut state) = simulator(&garment, &Material::COTTON, settings);
+    set_obstacle(&mut sim, &floor);
     let far_edge: Vec<u32> = (0..rows).map(|j| j * columns + columns - 1).collect();
     let axis_height = settings.thickness + 0.02;
     let fold = Motion::Script(Arc::new(move |t: f64| {
@@ -298,7 +280,6 @@ fn sheet_folds_onto_itself_without_crossing() {
         Isometry3::from_parts(Translation3::from(pivot - turn * pivot), turn)
     }));
     sim.pin(&far_edge, fold.clone()).unwrap();
-    let mut state = State::at_rest(sim.model());
     let mut checker = Checker::new(&garment, Some(&floor), &settings);
     for frame in 0..36 {
         sim.step(&mut state, FRAME).unwrap();
@@ -324,15 +305,8 @@ fn a_box_swept_through_the_sheet_in_one_frame_does_not_tunnel() {
     let start = block(low, high);
     let rise = Vector3::new(0.0, 1.2, 0.0);
     let end: Vec<Point> = start.positions().iter().map(|p| p + rise).collect();
-    let model = Model::new(&garment, &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, settings).unwrap();
-    sim.set_obstacle(
-        start.positions(),
-        start.face_offsets(),
-        start.face_vertices(),
-    )
-    .unwrap();
-    let mut state = State::at_rest(sim.model());
+    let (mut sim, mut state) = simulator(&garment, &Material::COTTON, settings);
+    set_obstacle(&mut sim, &start);
     let mut checker = Checker::new(&garment, Some(&start), &settings);
     // One frame: the box passes from 0.5 m below the sheet to 0.4 m above it (29 m/s).
     sim.set_obstacle_motion(0.0, start.positions(), FRAME, &end)
@@ -343,11 +317,7 @@ fn a_box_swept_through_the_sheet_in_one_frame_does_not_tunnel() {
         pushed += report.impacts + report.contacts;
         let h = checker.obstacle.as_mut().unwrap();
         h.refit(&end, 0.0).unwrap();
-        let nearest = h
-            .signed_distances(&state.positions)
-            .unwrap()
-            .into_iter()
-            .fold(f64::INFINITY, f64::min);
+        let nearest = nearest(h, &state.positions);
         assert!(
             nearest >= 0.5 * settings.thickness,
             "frame {frame}: {nearest} m"
@@ -373,29 +343,21 @@ fn drape_surface_clearance(frames: u32, with_surface: bool) -> (f64, f64) {
     let ball = sphere(Point::new(0.0, -1.0, 0.0), 0.5, 12, 24);
     let settings = Settings::default();
     let stencils = Refiner::new(&garment, 2).stencils();
-    let model = Model::new(&garment, &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, settings).unwrap();
-    sim.set_obstacle(ball.positions(), ball.face_offsets(), ball.face_vertices())
-        .unwrap();
+    let (mut sim, mut state) = simulator(&garment, &Material::COTTON, settings);
+    set_obstacle(&mut sim, &ball);
     if with_surface {
         sim.set_collision_surface(stencils.clone()).unwrap();
     }
-    let mut state = State::at_rest(sim.model());
     let mut ball_hierarchy = hierarchy(&ball);
     ball_hierarchy.refit(ball.positions(), 0.0).unwrap();
     let mut refined = vec![Point::origin(); stencils.len()];
-    let mut nearest = f64::INFINITY;
+    let mut closest = f64::INFINITY;
     for _ in 0..frames {
         sim.step(&mut state, FRAME).unwrap();
         stencils.apply(&state.positions, &mut refined);
-        let frame_nearest = ball_hierarchy
-            .signed_distances(&refined)
-            .unwrap()
-            .into_iter()
-            .fold(f64::INFINITY, f64::min);
-        nearest = nearest.min(frame_nearest);
+        closest = closest.min(nearest(&ball_hierarchy, &refined));
     }
-    (nearest, settings.thickness)
+    (closest, settings.thickness)
 }
 
 #[test]
@@ -427,13 +389,11 @@ fn clamped_strip(edge: f64, self_collision: bool, frames: u32) -> (State, f64, f
         self_collision,
         ..Settings::default()
     };
-    let model = Model::new(&garment, &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, settings).unwrap();
+    let (mut sim, mut state) = simulator(&garment, &Material::COTTON, settings);
     let clamp: Vec<u32> = (0..rows)
         .flat_map(|j| [j * columns, j * columns + 1])
         .collect();
     sim.pin(&clamp, Motion::Fixed).unwrap();
-    let mut state = State::at_rest(sim.model());
     let (mut strain, mut impacts) = (0.0f64, 0);
     for _ in 0..frames {
         let report = sim.step(&mut state, FRAME).unwrap();
@@ -459,12 +419,7 @@ fn a_finely_meshed_strip_droops_the_same_with_self_collision() {
             (30.0..80.0).contains(&free_angle),
             "edge {edge}: without self-collision the tip is at {free_angle}°"
         );
-        let apart = free
-            .positions
-            .iter()
-            .zip(&held.positions)
-            .map(|(p, q)| (p - q).norm())
-            .fold(0.0, f64::max);
+        let apart = farthest(&free, &held);
         assert!(
             apart <= 1e-9 && impacts == 0,
             "edge {edge}: self-collision moved the strip by {apart} m ({impacts} impacts), tip \

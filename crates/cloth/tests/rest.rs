@@ -16,10 +16,13 @@
 //! (1/48 s) into seven deeper ones (0.59); the fold count is a bifurcation of the first
 //! half-second, in which the skirt falls more slowly at 1/48 s.
 
-use tailor_cloth::Vec3;
 use tailor_cloth::shapes::{cylinder, disc, drape_coefficient};
-use tailor_cloth::{Integrator, Material, Model, Settings, Simulator, State};
+use tailor_cloth::{Integrator, Material, Settings, Vec3};
 use tailor_subdiv::Point;
+
+use common::{moved, set_obstacle, simulator};
+
+mod common;
 
 const FPS: f64 = 24.0;
 const PEDESTAL: f64 = 0.045;
@@ -28,14 +31,7 @@ const PEDESTAL: f64 = 0.045;
 /// frame (m/s, its displacement over the frame's length) and the drape coefficient.
 fn drape(substeps: u32, seconds: u32) -> (f64, f64) {
     let thickness = 0.002;
-    let mut fabric = disc(0.075, 12, 4);
-    let lifted: Vec<Point> = fabric
-        .positions()
-        .iter()
-        .map(|p| p + Vec3::y() * thickness)
-        .collect();
-    fabric.set_positions(&lifted).unwrap();
-    let model = Model::new(&fabric, &Material::COTTON).unwrap();
+    let fabric = moved(&disc(0.075, 12, 4), Vec3::y() * thickness);
     let settings = Settings {
         max_substep: 1.0 / (FPS * f64::from(substeps)),
         thickness,
@@ -45,15 +41,9 @@ fn drape(substeps: u32, seconds: u32) -> (f64, f64) {
         integrator: Integrator::Bdf2,
         ..Settings::default()
     };
-    let mut sim = Simulator::new(model, settings).unwrap();
+    let (mut sim, mut state) = simulator(&fabric, &Material::COTTON, settings);
     let stand = cylinder(Point::new(0.0, -0.1, 0.0), PEDESTAL, 0.1, 48);
-    sim.set_obstacle(
-        stand.positions(),
-        stand.face_offsets(),
-        stand.face_vertices(),
-    )
-    .unwrap();
-    let mut state = State::at_rest(sim.model());
+    set_obstacle(&mut sim, &stand);
     let mut last = state.positions.clone();
     for _ in 0..seconds * FPS as u32 {
         last.clone_from(&state.positions);

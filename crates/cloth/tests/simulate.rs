@@ -4,22 +4,21 @@
 //! damping conserves energy; damped implicit steps lose it; pins, attachments and contact
 //! planes hold exactly; the frame rate does not change the physics; the thread count does not
 //! change a single bit, nor does restarting a fresh simulator from a saved state; a solve that
-//! cannot succeed ends in a typed error, never NaN; free fall and linear drag's terminal
-//! velocity match the integrator's own answers at any number of substeps.
+//! cannot succeed ends in a typed error, never NaN; where full Newton steps overshoot, every
+//! step the line search takes decreases the incremental potential; free fall and linear drag's
+//! terminal velocity match the integrator's own answers at any number of substeps.
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use tailor_cloth::shapes::{sheet, sphere};
 use tailor_cloth::{
-    Attachment, ClothError, Contact, Integrator, Material, Model, Motion, Settings, Simulator,
-    State, StepFailure,
+    Attachment, ClothError, Contact, Integrator, Material, Motion, Settings, Simulator, State,
+    StepFailure, StepReport, Vec3,
 };
 use tailor_subdiv::Point;
 
-use common::farthest;
+use common::{FRAME, farthest, set_obstacle, simulator};
 
 mod common;
-
-const FRAME: f64 = 1.0 / 24.0;
 
 /// Material with only stretch (and optional damping): no shear, bend or drag.
 fn springs_only(stretch: f64, damping: f64) -> Material {
@@ -36,10 +35,8 @@ fn springs_only(stretch: f64, damping: f64) -> Material {
 
 /// An n × n curtain of 1 m, pinned at the two corners of its first row, falling from flat.
 fn curtain(n: u32, settings: Settings) -> (Simulator, State) {
-    let model = Model::new(&sheet(n, n, 1.0, 1.0), &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, settings).unwrap();
+    let (mut sim, state) = simulator(&sheet(n, n, 1.0, 1.0), &Material::COTTON, settings);
     sim.pin(&[0, n - 1], Motion::Fixed).unwrap();
-    let state = State::at_rest(sim.model());
     (sim, state)
 }
 
@@ -48,21 +45,16 @@ fn hanging_strip_settles_at_the_analytic_stretch() {
     // Two columns of 11 vertices, 0.1 m apart, hanging along −z from the top row.
     let (rows, spacing, width) = (11u32, 0.1, 0.1);
     let material = springs_only(50.0, 0.02);
-    let model = Model::new(
-        &sheet(2, rows, width, spacing * f64::from(rows - 1)),
-        &material,
-    )
-    .unwrap();
+    let strip = sheet(2, rows, width, spacing * f64::from(rows - 1));
     let g = 9.81;
     let settings = Settings {
         gravity: Vector3::new(0.0, 0.0, -g),
         cg_tolerance: 1e-10,
         ..Settings::default()
     };
-    let mut sim = Simulator::new(model, settings).unwrap();
+    let (mut sim, mut state) = simulator(&strip, &material, settings);
     sim.pin(&[2 * (rows - 1), 2 * (rows - 1) + 1], Motion::Fixed)
         .unwrap();
-    let mut state = State::at_rest(sim.model());
     for _ in 0..240 {
         sim.step(&mut state, FRAME).unwrap();
     }
@@ -91,14 +83,13 @@ fn hanging_strip_settles_at_the_analytic_stretch() {
 
 #[test]
 fn undamped_symplectic_steps_conserve_energy() {
-    let model = Model::new(&sheet(6, 6, 1.0, 1.0), &springs_only(100.0, 0.0)).unwrap();
     let settings = Settings {
         max_substep: 2e-4,
         gravity: Vector3::zeros(),
         ..Settings::default()
     };
-    let mut sim = Simulator::new(model, settings).unwrap();
-    let mut state = State::at_rest(sim.model());
+    let (mut sim, mut state) =
+        simulator(&sheet(6, 6, 1.0, 1.0), &springs_only(100.0, 0.0), settings);
     for (i, (p, v)) in state
         .positions
         .iter_mut()
@@ -118,10 +109,12 @@ fn undamped_symplectic_steps_conserve_energy() {
 
 #[test]
 fn damped_implicit_steps_lose_energy_monotonically() {
-    let model = Model::new(&sheet(9, 9, 1.0, 1.0), &Material::COTTON).unwrap();
-    let mut sim = Simulator::new(model, Settings::default()).unwrap();
+    let (mut sim, mut state) = simulator(
+        &sheet(9, 9, 1.0, 1.0),
+        &Material::COTTON,
+        Settings::default(),
+    );
     sim.pin(&[0, 8], Motion::Fixed).unwrap();
-    let mut state = State::at_rest(sim.model());
     let mut last = sim.energy(&state);
     for frame in 0..48 {
         sim.step(&mut state, FRAME).unwrap();
@@ -263,20 +256,58 @@ fn thread_count_does_not_change_a_bit() {
     assert_eq!(bits(&one), bits(&two));
 }
 
-#[test]
-fn newton_with_line_search_takes_large_steps() {
+/// The curtain of 8², without strain limiting, flung away from its pins in its own plane
+/// (each vertex at 10 m/s per metre from the pinned edge) and stepped for half a second at
+/// one substep of two Newton iterations a frame: the state, and each frame's report and
+/// energy (before the first frame, then after each).
+fn flung_curtain(line_search: bool) -> (State, Vec<StepReport>, Vec<f64>) {
     let settings = Settings {
         max_substep: FRAME,
-        newton_iterations: 4,
-        line_search: true,
+        newton_iterations: 2,
+        line_search,
+        strain_limit: 0.0,
         ..Settings::default()
     };
     let (mut sim, mut state) = curtain(8, settings);
-    for _ in 0..24 {
-        let report = sim.step(&mut state, FRAME).unwrap();
-        assert_eq!(report.substeps, 1);
-        assert!(report.max_strain < 0.1, "strain {}", report.max_strain);
+    for (p, v) in state.positions.iter().zip(&mut state.velocities) {
+        v.z = 10.0 * p.z;
     }
+    let mut energies = vec![sim.energy(&state)];
+    let mut reports = Vec::new();
+    for _ in 0..12 {
+        reports.push(sim.step(&mut state, FRAME).unwrap());
+        energies.push(sim.energy(&state));
+    }
+    (state, reports, energies)
+}
+
+#[test]
+fn the_line_search_decreases_the_incremental_potential_at_every_newton_step() {
+    // Full Newton steps overshoot here: the flung curtain's springs are far from linear over
+    // a 1/24 s substep, and without the search its first frame ends with edges 54% stretched
+    // and twelve times the energy it started with.
+    let (_, plain, _) = flung_curtain(false);
+    let overshoots: u32 = plain.iter().map(|r| r.insufficient_decreases).sum();
+    assert!(overshoots > 0, "full Newton steps no longer overshoot");
+    let (state, reports, energies) = flung_curtain(true);
+    for (frame, report) in reports.iter().enumerate() {
+        assert_eq!(
+            report.insufficient_decreases, 0,
+            "frame {frame}: a Newton step did not decrease Φ as Armijo's condition asks: \
+             {report:?}"
+        );
+        assert_eq!(report.substeps, 1, "frame {frame}: {report:?}");
+        // With every step a descent the edges stay near their rest length (1.6% at most).
+        assert!(report.max_strain < 0.05, "frame {frame}: {report:?}");
+        // Damping, drag and fixed pins only take energy out.
+        let (before, after) = (energies[frame], energies[frame + 1]);
+        assert!(after < before, "frame {frame}: {after} J after {before} J");
+    }
+    let halvings: u32 = reports.iter().map(|r| r.line_search_halvings).sum();
+    assert!(halvings > 0, "the line search never shortened a step");
+    let finite = |v: &Vec3| v.iter().all(|c| c.is_finite());
+    assert!(state.positions.iter().all(|p| finite(&p.coords)));
+    assert!(state.velocities.iter().all(finite));
 }
 
 #[test]
@@ -306,14 +337,12 @@ fn an_impossible_solve_is_a_typed_error_not_nan() {
 /// at 24 fps in `substeps` implicit steps a frame; returns the mean drop and the mean
 /// vertical velocity at the end.
 fn fall(material: &Material, integrator: Integrator, substeps: u32, seconds: f64) -> (f64, f64) {
-    let model = Model::new(&sheet(5, 5, 0.1, 0.1), material).unwrap();
     let settings = Settings {
         max_substep: FRAME / f64::from(substeps),
         integrator,
         ..Settings::default()
     };
-    let mut sim = Simulator::new(model, settings).unwrap();
-    let mut state = State::at_rest(sim.model());
+    let (mut sim, mut state) = simulator(&sheet(5, 5, 0.1, 0.1), material, settings);
     let frames = (seconds / FRAME).round() as u32;
     for _ in 0..frames {
         sim.step(&mut state, FRAME).unwrap();
@@ -409,8 +438,7 @@ fn a_restarted_simulator_computes_the_same_bits() {
         };
         let (mut sim, state) = curtain(12, settings);
         let ball = sphere(Point::new(0.5, -0.45, 0.5), 0.3, 12, 24);
-        sim.set_obstacle(ball.positions(), ball.face_offsets(), ball.face_vertices())
-            .unwrap();
+        set_obstacle(&mut sim, &ball);
         (sim, state)
     };
     let (mut whole, mut state) = make();

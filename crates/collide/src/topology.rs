@@ -208,6 +208,10 @@ fn uniform_fan(face_offsets: &[u32]) -> Option<u32> {
 }
 
 /// Groups item indices by owner (counting sort); owners `u32::MAX` (none) are left out.
+///
+/// The stable counting sort of `tailor_subdiv::csr`, which the rest of the workspace builds
+/// its tables with; this crate takes positions and faces and depends on no other crate of the
+/// workspace, so it keeps its own.
 pub(crate) fn group_by_owner(owner: &[u32], owners: usize) -> (Vec<u32>, Vec<u32>) {
     let mut offsets = vec![0u32; owners + 1];
     for &o in owner.iter().filter(|&&o| o != u32::MAX) {

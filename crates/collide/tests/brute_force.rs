@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{Mesh, Rng, folded_sheet, ngon_sheet, sheet, soup, sphere, torus, wave};
+use common::{Mesh, Rng, collapsed, folded_sheet, ngon_sheet, sheet, soup, sphere, torus, wave};
 use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::Triangle;
@@ -131,10 +131,7 @@ fn self_proximity_matches_brute_force() {
             let got = h.self_proximity(d, &LocalFaces::default()).unwrap();
             for (v, q) in m.positions.iter().enumerate() {
                 let all = all_distances(&m, &m.positions, q);
-                let face_has_v = |f: u32| {
-                    m.corners[m.offsets[f as usize] as usize..m.offsets[f as usize + 1] as usize]
-                        .contains(&(v as u32))
-                };
+                let face_has_v = |f: u32| m.face_corners(f).contains(&(v as u32));
                 let faces: Vec<u32> = got.of(v).iter().map(|c| c.face).collect();
                 assert_eq!(
                     faces,
@@ -170,7 +167,7 @@ fn local_faces_are_the_sheet_around_a_vertex_not_the_layer_above() {
     let local = h.local_faces(d).unwrap();
     let near = h.self_proximity(d, &local).unwrap();
     let upper = |f: u32| {
-        taco.corners[taco.offsets[f as usize] as usize..taco.offsets[f as usize + 1] as usize]
+        taco.face_corners(f)
             .iter()
             .all(|&c| taco.positions[c as usize].z == 0.2)
     };
@@ -190,9 +187,9 @@ fn local_faces_are_the_sheet_around_a_vertex_not_the_layer_above() {
 }
 
 fn share_vertex(m: &Mesh, f: u32, g: u32) -> bool {
-    let face =
-        |f: u32| &m.corners[m.offsets[f as usize] as usize..m.offsets[f as usize + 1] as usize];
-    face(f).iter().any(|v| face(g).contains(v))
+    m.face_corners(f)
+        .iter()
+        .any(|v| m.face_corners(g).contains(v))
 }
 
 /// Brute force: every pair of faces sharing no vertex whose triangles meet.
@@ -563,10 +560,7 @@ fn bad_input_is_an_error_and_degenerate_triangles_are_counted() {
     // Collapse triangle 4 of a soup onto a segment and triangle 7 onto a point: both are
     // counted, and neither is ever reported.
     let s = soup(10, 0.3, 4);
-    let mut q = s.positions.clone();
-    q[13] = q[12] + (q[14] - q[12]) * 0.5;
-    q[22] = q[21];
-    q[23] = q[21];
+    let q = collapsed(&s);
     let mut h = build(&s);
     h.refit(&q, 0.0).unwrap();
     assert_eq!(h.degenerate_triangles(), 2);
@@ -592,10 +586,7 @@ fn closest_points_break_ties_and_skip_zero_area_like_brute_force() {
     // A soup whose triangles 4 and 7 collapse to a segment and a point, queried at and around
     // them: the nearest triangle is often a zero-area one, which must be skipped.
     let s = soup(40, 0.3, 4);
-    let mut collapsed = s.positions.clone();
-    collapsed[13] = collapsed[12] + (collapsed[14] - collapsed[12]) * 0.5;
-    collapsed[22] = collapsed[21];
-    collapsed[23] = collapsed[21];
+    let collapsed = collapsed(&s);
     let mut rng = Rng::new(12);
     let near: Vec<Point> = [12, 13, 14, 21]
         .iter()

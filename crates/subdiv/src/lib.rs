@@ -3,8 +3,8 @@
 //! The crate follows OpenSubdiv's three layers (see `../shared/STYLE.md`):
 //! - **rules** ([`rules`]): pure functions from a local configuration (valence, sharpness,
 //!   boundary) to weights, after OpenSubdiv's `Sdc`;
-//! - **topology** ([`topology`], [`refine`]): connectivity tables built once per mesh and per
-//!   level, after `Vtr`;
+//! - **topology** ([`topology`], [`refine`]): connectivity tables ([`csr`]) built once per mesh
+//!   and per level, after `Vtr`;
 //! - **evaluation** ([`stencil`], [`limit`], [`evaluator`]): sparse weights over the control
 //!   points that turn a new frame's positions into the refined or limit surface, after `Far`,
 //!   and B-spline patches (`patches`) that re-evaluate regular regions faster.
@@ -36,6 +36,7 @@
 
 #[cfg(feature = "conformance")]
 pub mod conformance;
+pub mod csr;
 pub mod evaluator;
 pub mod fvar;
 pub mod limit;

@@ -28,9 +28,10 @@
 
 use rayon::prelude::*;
 
+use crate::csr::{Csr, running_totals};
 use crate::mesh::to_u32;
 use crate::sparse::{SharedRows, SharedRowsBuilder};
-use crate::topology::{Csr, Level};
+use crate::topology::Level;
 
 /// Levels with patches: at level 1 a quad owns three points, too few to beat their stencil
 /// rows; above level 4 nobody refines a cloth mesh, and the kernels are specialised per level.
@@ -536,9 +537,7 @@ fn edge_starts(base: &Level) -> Option<Vec<u32>> {
         last = first;
         starts[first + 1] += 1;
     }
-    for f in 0..base.face_count() {
-        starts[f + 1] += starts[f];
-    }
+    running_totals(&mut starts);
     Some(starts)
 }
 

@@ -26,12 +26,13 @@ use std::sync::OnceLock;
 
 use rayon::prelude::*;
 
+use crate::csr::{Csr, offsets_from_lengths};
 use crate::mesh::to_u32;
 use crate::options::{CreaseMethod, Options, TriangleRule};
 use crate::rules::crease;
 use crate::rules::masks::{self, EdgeMask, Mask, VertexNeighbourhood};
-use crate::sparse::{CHUNK, Primvar, SparseRows, fill_rows, offsets_from_lengths};
-use crate::topology::{Csr, Level, to_local};
+use crate::sparse::{CHUNK, Primvar, SparseRows, fill_rows};
+use crate::topology::{Level, to_local};
 
 /// A refinement step: the child level, and (built on first use) the weights of its vertices.
 ///

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use nalgebra::{Point3, SVector};
 use rayon::prelude::*;
 
-use crate::topology::Csr;
+use crate::csr::{Csr, offsets_from_lengths};
 
 /// A value that can be interpolated: positions, UVs, scalar fields.
 pub trait Primvar: Copy + Send + Sync {
@@ -349,29 +349,6 @@ impl SharedRowsBuilder {
         }
         self.rows
     }
-}
-
-/// CSR offsets (a leading zero, then running totals) of `rows` rows of the given lengths.
-pub(crate) fn offsets_from_lengths(
-    rows: usize,
-    length: impl Fn(usize) -> usize + Sync,
-) -> Vec<u32> {
-    let mut offsets: Vec<u32> = (0..=rows)
-        .into_par_iter()
-        .map(|r| {
-            if r == 0 {
-                0
-            } else {
-                crate::mesh::to_u32(length(r - 1))
-            }
-        })
-        .collect();
-    let mut total = 0u32;
-    for o in &mut offsets {
-        total += *o;
-        *o = total;
-    }
-    offsets
 }
 
 /// Fills two arrays laid out by CSR `offsets` row by row, in parallel: `fill(row, a, b)` gets

@@ -32,6 +32,7 @@
 
 use rayon::prelude::*;
 
+use crate::csr::{Csr, group_into};
 use crate::mesh::{Mesh, to_u32};
 use crate::options::BoundaryInterpolation;
 use crate::rules::crease::{self, INFINITE, Rule};
@@ -41,52 +42,6 @@ use crate::rules::crease::{self, INFINITE, Rule};
 #[inline]
 pub(crate) fn to_local(n: usize) -> u16 {
     u16::try_from(n).expect("face larger than Mesh allows")
-}
-
-/// A compressed sparse row table: row `i` is `items[offsets[i]..offsets[i + 1]]`.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Csr {
-    /// Row starts; one more than the number of rows.
-    pub offsets: Vec<u32>,
-    /// All rows' items, row after row.
-    pub items: Vec<u32>,
-}
-
-impl Csr {
-    /// Row `i`.
-    #[must_use]
-    #[inline]
-    pub fn row(&self, i: usize) -> &[u32] {
-        &self.items[self.range(i)]
-    }
-
-    /// The item range of row `i`.
-    #[must_use]
-    #[inline]
-    pub fn range(&self, i: usize) -> std::ops::Range<usize> {
-        self.offsets[i] as usize..self.offsets[i + 1] as usize
-    }
-
-    /// Number of rows.
-    #[must_use]
-    #[inline]
-    pub fn rows(&self) -> usize {
-        self.offsets.len() - 1
-    }
-
-    /// A table with the given row lengths, items zeroed.
-    pub(crate) fn with_counts(counts: impl IntoIterator<Item = u32>) -> Self {
-        let mut offsets = vec![0u32];
-        let mut total = 0u32;
-        for c in counts {
-            total += c;
-            offsets.push(total);
-        }
-        Self {
-            items: vec![0; total as usize],
-            offsets,
-        }
-    }
 }
 
 /// One level of a refinement hierarchy.
@@ -314,51 +269,30 @@ impl Level {
     }
 
     /// Fills edge→faces, vertex→faces and vertex→edges in the order OpenSubdiv first builds
-    /// them (faces in face order, edges in edge order).
+    /// them (faces in face order, edges in edge order): each a stable grouping of the corners
+    /// or edges by their edge or vertex.
     fn build_incidence(&mut self) {
         let (nv, ne) = (self.vertex_count, self.edge_count());
-        let mut ef = vec![0u32; ne];
-        let mut vf = vec![0u32; nv];
-        let mut ve = vec![0u32; nv];
-        for &e in &self.face_edges {
-            ef[e as usize] += 1;
-        }
-        for &v in &self.face_verts.items {
-            vf[v as usize] += 1;
-        }
-        for &[a, b] in &self.edge_verts {
-            ve[a as usize] += 1;
-            ve[b as usize] += 1;
-        }
-        self.edge_faces = Csr::with_counts(ef);
-        self.edge_face_local = vec![0; self.edge_faces.items.len()];
-        self.vert_faces = Csr::with_counts(vf);
-        self.vert_face_local = vec![0; self.vert_faces.items.len()];
-        self.vert_edges = Csr::with_counts(ve);
-        let mut ef_fill = self.edge_faces.offsets[..ne].to_vec();
-        let mut vf_fill = self.vert_faces.offsets[..nv].to_vec();
-        let mut ve_fill = self.vert_edges.offsets[..nv].to_vec();
-        for f in 0..self.face_count() {
+        // Every corner as (its face, its place in the face, its index in the flat tables).
+        let corners = (0..self.face_count()).flat_map(|f| {
             let range = self.face_verts.range(f);
-            for (j, corner) in range.enumerate() {
-                let e = self.face_edges[corner] as usize;
-                let slot = ef_fill[e] as usize;
-                self.edge_faces.items[slot] = to_u32(f);
-                self.edge_face_local[slot] = to_local(j);
-                ef_fill[e] += 1;
-                let v = self.face_verts.items[corner] as usize;
-                let slot = vf_fill[v] as usize;
-                self.vert_faces.items[slot] = to_u32(f);
-                self.vert_face_local[slot] = to_local(j);
-                vf_fill[v] += 1;
-            }
-        }
-        for (e, &[a, b]) in self.edge_verts.iter().enumerate() {
-            for v in [a as usize, b as usize] {
-                self.vert_edges.items[ve_fill[v] as usize] = to_u32(e);
-                ve_fill[v] += 1;
-            }
-        }
+            let start = range.start;
+            range.map(move |corner| (to_u32(f), to_local(corner - start), corner))
+        });
+        let mut in_faces = Vec::new();
+        let by_edge = corners
+            .clone()
+            .map(|(f, j, corner)| (self.face_edges[corner], (f, j)));
+        group_into(ne, by_edge, &mut self.edge_faces.offsets, &mut in_faces);
+        (self.edge_faces.items, self.edge_face_local) = in_faces.iter().copied().unzip();
+        let by_vertex = corners.map(|(f, j, corner)| (self.face_verts.items[corner], (f, j)));
+        group_into(nv, by_vertex, &mut self.vert_faces.offsets, &mut in_faces);
+        (self.vert_faces.items, self.vert_face_local) = in_faces.into_iter().unzip();
+        let ends = self.edge_verts.iter().enumerate();
+        self.vert_edges = Csr::group_by(
+            nv,
+            ends.flat_map(|(e, &[a, b])| [(a, to_u32(e)), (b, to_u32(e))]),
+        );
     }
 
     /// Orders faces and edges counter-clockwise around every vertex that touches no

@@ -38,6 +38,11 @@ impl Mesh {
         self.offsets.len() - 1
     }
 
+    /// The corners of face `f`.
+    pub fn face_corners(&self, f: u32) -> &[u32] {
+        &self.corners[self.offsets[f as usize] as usize..self.offsets[f as usize + 1] as usize]
+    }
+
     /// The same surface with every polygon split into its fan triangles, one face each.
     pub fn triangulated(&self) -> Mesh {
         let mut m = Mesh::new();
@@ -51,10 +56,10 @@ impl Mesh {
     /// The fan triangles (as the hierarchy splits faces) with their face.
     pub fn triangles(&self) -> Vec<([u32; 3], u32)> {
         let mut out = Vec::new();
-        for f in 0..self.face_count() {
-            let c = &self.corners[self.offsets[f] as usize..self.offsets[f + 1] as usize];
+        for f in 0..self.face_count() as u32 {
+            let c = self.face_corners(f);
             for w in c[1..].windows(2) {
-                out.push(([c[0], w[0], w[1]], f as u32));
+                out.push(([c[0], w[0], w[1]], f));
             }
         }
         out
@@ -242,6 +247,16 @@ pub fn soup(count: u32, size: f64, seed: u64) -> Mesh {
         m.face([3 * t, 3 * t + 1, 3 * t + 2]);
     }
     m
+}
+
+/// The positions of a `soup` of at least 8 triangles with triangle 4 collapsed onto a
+/// segment (its second vertex at the midpoint of the other two) and triangle 7 onto a point.
+pub fn collapsed(soup: &Mesh) -> Vec<Point> {
+    let mut p = soup.positions.clone();
+    p[13] = p[12] + (p[14] - p[12]) * 0.5;
+    p[22] = p[21];
+    p[23] = p[21];
+    p
 }
 
 /// A travelling wave over a sheet in the plane z = 0, at time `t`.

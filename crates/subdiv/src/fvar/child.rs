@@ -13,7 +13,8 @@
 //! vertex's values consecutively. Semi-sharp values whose sharpness has decayed become creases
 //! (`reclassifySemisharpValues`).
 
-use super::level::{EdgeTag, FVarLevel, Mode, ValueTag, has_semi_sharp_edges, prefix_sums};
+use super::level::{EdgeTag, FVarLevel, Mode, ValueTag, has_semi_sharp_edges};
+use crate::csr::offsets_from_counts;
 use crate::mesh::to_u32;
 use crate::refine::Refinement;
 use crate::rules::crease;
@@ -32,13 +33,12 @@ impl FVarLevel {
                 1
             }
         };
-        let counts: Vec<u32> = (0..nv)
+        let counts = (0..nv)
             .map(|v| if matched(v) { 1 } else { self.count(v) })
             .chain(std::iter::repeat_n(1, nf))
             .chain((0..ne).map(edge_values))
-            .map(to_u32)
-            .collect();
-        let offsets = prefix_sums(&counts);
+            .map(to_u32);
+        let offsets = offsets_from_counts(counts);
         let slots = *offsets.last().expect("offsets") as usize;
         let mut child = Self {
             face_values: Vec::new(),

@@ -18,6 +18,7 @@
 //! Crease values remember the first and last face of their span around the vertex, from which
 //! the two crease end values are read.
 
+use crate::csr::offsets_from_counts;
 use crate::mesh::{FaceVarying, to_u32};
 use crate::options::{BoundaryInterpolation, FVarLinear, Options};
 use crate::rules::crease;
@@ -246,7 +247,7 @@ impl FVarLevel {
             }
             counts.push(to_u32(count));
         }
-        fl.offsets = prefix_sums(&counts);
+        fl.offsets = offsets_from_counts(counts);
         let slots = *fl.offsets.last().expect("offsets") as usize;
         fl.slot_values = vec![0; slots];
         fl.tags = vec![ValueTag::default(); slots];
@@ -543,18 +544,6 @@ impl FVarLevel {
             }
         }
     }
-}
-
-/// Running totals: `[0, c0, c0 + c1, ...]`.
-pub(crate) fn prefix_sums(counts: &[u32]) -> Vec<u32> {
-    let mut out = Vec::with_capacity(counts.len() + 1);
-    let mut total = 0u32;
-    out.push(0);
-    for &c in counts {
-        total += c;
-        out.push(total);
-    }
-    out
 }
 
 /// Numbers the distinct values around a vertex in order of first appearance and writes each
