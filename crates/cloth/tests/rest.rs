@@ -3,7 +3,7 @@
 //! 9 cm pedestal, thickness 2 mm, friction 0.3, self-collision on) settles until every vertex
 //! moves slower than 1 mm/s, and its drape coefficient agrees to ±0.02 at 2, 5 and 10 substeps
 //! a frame. The full-size drape is `examples/cusick.rs` (cotton after 15 s: every vertex under
-//! 0.2 mm/s, coefficients 0.264, 0.263 and 0.268 at 2, 5 and 10 substeps).
+//! 0.1 mm/s, coefficients 0.264, 0.265 and 0.268 at 2, 5 and 10 substeps).
 //!
 //! What holds the drape still is friction inside the solve (the `friction` module of the
 //! crate): a contact that sticks is held whole by the constraint filter, one that slides
@@ -14,8 +14,8 @@
 //! The disc is laid with up to a tenth of a millimetre of random height on its thickness
 //! above the pedestal, as a fabric is never quite flat. A perfectly flat disc on a round
 //! pedestal is a symmetric buckling problem, and which fold count it chooses was decided by
-//! round-off: seven folds at 2 substeps and eight at 5 and 10 (coefficients 0.589, 0.623,
-//! 0.628). Given a shape to buckle from, it settles alike at every substep.
+//! round-off: seven folds at 2 substeps and eight at 5 and 10 (coefficients 0.589, 0.615,
+//! 0.626). Given a shape to buckle from, it settles alike at every substep.
 
 use tailor_cloth::shapes::{cylinder, disc, drape_coefficient};
 use tailor_cloth::{Integrator, Material, Settings, Vec3};

@@ -32,12 +32,14 @@ const PROJECTION_SLACK: f64 = 1e-6;
 const FLOOR: f64 = 0.75;
 
 /// How far from the body, in thicknesses, a vertex counts as resting on it: the first look
-/// for contacts adds gravity's pull over the substep to such a vertex's velocity. Farther
-/// away, gravity's pull (g h², 4 mm at 1/48 s) took vertices up to three thicknesses off the
-/// body as contacts, and a contact's approach velocity then drew them onto it: the rim of a
-/// pedestal held a draped skirt out. A free vertex the solve brings closer than half the
-/// thickness becomes a contact at the second look.
-const RESTING: f64 = 1.1;
+/// for contacts adds gravity's pull over the substep to such a vertex's velocity. A resting
+/// vertex sits at the thickness or a little above it (the refined-surface lift raises control
+/// points by the sag of the surface between them). Farther away, gravity's pull (g h², 4 mm
+/// at 1/48 s) took vertices up to three thicknesses off the body as contacts, and a
+/// contact's approach velocity then drew them onto it: the rim of a pedestal held a draped
+/// skirt out. A free vertex the solve brings closer than half the thickness becomes a contact
+/// at the second look.
+const RESTING: f64 = 1.2;
 
 /// A moving polygon mesh the garment collides with.
 #[derive(Clone, Debug)]
