@@ -7,7 +7,7 @@
 //! kept them to the last bit.
 //!
 //! `cargo run --release -p tailor-cloth --example drape -- [N] [--self] [--frames F] [--substeps S]
-//! [--bdf2]` (the library's default integrator, backward Euler, unless `--bdf2`)
+//! [--backward-euler]` (the library's default integrator, BDF2, unless `--backward-euler`)
 
 use std::time::Instant;
 
@@ -25,7 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--self" => self_collision = true,
-            "--bdf2" => integrator = Integrator::Bdf2,
+            "--backward-euler" => integrator = Integrator::BackwardEuler,
             "--frames" => frames = args.next().ok_or("--frames needs a count")?.parse()?,
             "--substeps" => {
                 substeps = Some(args.next().ok_or("--substeps needs a count")?.parse()?);

@@ -78,7 +78,7 @@ use crate::energy::Vec3;
 use crate::model::Springs;
 use crate::settings::Settings;
 use crate::strain_limit::StrainLimiter;
-use crate::substep::{Floor, HELD_MASS, Substep};
+use crate::substep::{Floor, HELD_MASS, Impulses, Substep};
 use crate::{ClothError, Model};
 
 /// Rounds of self-impact impulses before impact zones take over (rigid zones strain the cloth
@@ -193,12 +193,11 @@ impl Response {
         mut integrator: Substep,
         x0: &[Point],
         h: f64,
-        residual: &[Vec3],
+        contact: Impulses,
     ) -> Result<u32, CollideError> {
         // Coulomb's law on the solve's contact impulses first: strain limiting and the
         // collision passes have the last word.
-        self.collisions
-            .friction(settings, residual, &mut integrator);
+        self.collisions.friction(settings, contact, &mut integrator);
         let Substep {
             x, v, inverse_mass, ..
         } = integrator;

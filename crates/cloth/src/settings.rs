@@ -12,17 +12,17 @@ use crate::energy::Vec3;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Integrator {
     /// Second-order backward differentiation (Choi & Ko 2002), started by one trapezoidal
-    /// substep: results change little with the step, as long as the step resolves the
-    /// garment's folding (`tailor simulate`'s default, at five substeps a frame).
+    /// substep: results change little with the step ([`Settings::default`]'s, and
+    /// `tailor simulate`'s).
     Bdf2,
     /// Baraff & Witkin's first-order backward Euler, which damps motion in proportion to the
-    /// step: [`Settings::default`]'s, robust at two substeps a frame.
+    /// step.
     BackwardEuler,
 }
 
-/// How the simulator steps. The defaults are the library's (backward Euler at two substeps a
-/// frame at 24 fps, no self-collision); a `tailor` scene has its own (BDF2 at five,
-/// self-collision on), for the reasons `docs/DESIGN.md` gives.
+/// How the simulator steps. The defaults are the library's (BDF2 at two substeps a frame at
+/// 24 fps, no self-collision); a `tailor` scene has its own (five substeps, self-collision
+/// on), for the reasons `docs/DESIGN.md` gives.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
     /// Longest substep, seconds (default 1/48: 2 substeps per frame at 24 fps).
@@ -68,7 +68,7 @@ impl Default for Settings {
     fn default() -> Self {
         Self {
             max_substep: 1.0 / 48.0,
-            integrator: Integrator::BackwardEuler,
+            integrator: Integrator::Bdf2,
             newton_iterations: 1,
             line_search: false,
             cg_tolerance: 1e-2,

@@ -71,7 +71,7 @@ use crate::pcg::{Pcg, Stop};
 use crate::reduce::{partial_count, sum_by};
 use crate::response::Response;
 pub use crate::settings::{Integrator, Settings};
-use crate::substep::Substep;
+use crate::substep::{Impulses, Substep};
 use crate::{ClothError, Model, StepFailure};
 
 /// Why a substep did not complete.
@@ -683,16 +683,62 @@ impl Simulator {
             {
                 break;
             }
-            self.prepare_filter(t1, h);
-            let w = &mut self.work;
-            // Keep the free part of the last solution; put the constrained part on target.
-            let f = &w.filter;
-            for (i, d) in w.delta.iter_mut().enumerate() {
-                *d = f.s[i] * *d + (Mat3::identity() - f.s[i]) * (f.z[i] - w.v[i]);
-            }
-            self.solve(report, Some(reference))?;
+            self.solve_again(t1, h, reference, report)?;
         }
         Ok(())
+    }
+
+    /// The contact impulses of the last solve, b − A Δv, for friction; if they show sticking
+    /// contacts that cannot hold (see the `collision::friction` module), those slide and the
+    /// same system is solved again from the last solution, once.
+    fn slip(
+        &mut self,
+        t1: f64,
+        h: f64,
+        reference: f64,
+        report: &mut StepReport,
+    ) -> Result<(), StepFailure> {
+        self.contact_impulses();
+        let w = &mut self.work;
+        let slipped = self.response.collisions_mut().slip(
+            &self.settings,
+            &w.impulse,
+            w.base_step,
+            &mut w.rhs,
+        );
+        if slipped {
+            self.solve_again(t1, h, reference, report)?;
+            self.contact_impulses();
+        }
+        Ok(())
+    }
+
+    /// Solves the same system again with the filter the changed contacts make, from the last
+    /// solution: its free part kept, its constrained part put on target.
+    fn solve_again(
+        &mut self,
+        t1: f64,
+        h: f64,
+        reference: f64,
+        report: &mut StepReport,
+    ) -> Result<(), StepFailure> {
+        self.prepare_filter(t1, h);
+        let w = &mut self.work;
+        let f = &w.filter;
+        for (i, d) in w.delta.iter_mut().enumerate() {
+            *d = f.s[i] * *d + (Mat3::identity() - f.s[i]) * (f.z[i] - w.v[i]);
+        }
+        self.solve(report, Some(reference))?;
+        Ok(())
+    }
+
+    /// The contact impulses of the last solve: `work.impulse` = b − A Δv.
+    fn contact_impulses(&mut self) {
+        let w = &mut self.work;
+        self.assembly.matrix.mul_into(&w.delta, &mut w.impulse);
+        for (j, b) in w.impulse.iter_mut().zip(&w.rhs) {
+            *j = b - *j;
+        }
     }
 
     /// The filter of the substep ending at `t1`: the constraints and the body contacts.
@@ -781,12 +827,7 @@ impl Simulator {
             self.add_missed_contacts(t1, h, reference, report)?;
             let last = iteration + 1 == self.settings.newton_iterations;
             if last {
-                // The contact impulses of the solve, b − A Δv, for friction.
-                let w = &mut self.work;
-                self.assembly.matrix.mul_into(&w.delta, &mut w.impulse);
-                for (j, b) in w.impulse.iter_mut().zip(&w.rhs) {
-                    *j = b - *j;
-                }
+                self.slip(t1, h, reference, report)?;
             }
             let w = &self.work;
             let slope: f64 = w.rhs.iter().zip(&w.delta).map(|(r, d)| r.dot(d)).sum();
@@ -837,10 +878,17 @@ impl Simulator {
             v: &mut w.trial,
             inverse_mass: &w.inverse_mass,
         };
+        // The time the solve's contact impulses act over: its step ĥ, or for BDF2's
+        // trapezoidal start the whole substep, whose explicit half's forces they also cancel.
+        let trapezoidal = self.settings.integrator == Integrator::Bdf2 && state.previous.is_none();
+        let contact = Impulses {
+            impulse: &w.impulse,
+            span: if trapezoidal { h } else { w.base_step },
+        };
         let springs = &self.model.springs;
         let impacts =
             self.response
-                .after_solve(&self.settings, springs, integrator, &w.x0, h, &w.impulse);
+                .after_solve(&self.settings, springs, integrator, &w.x0, h, contact);
         report.strain_corrections += self.response.take_strain_corrections();
         let impacts = impacts?;
         state.remember(h);

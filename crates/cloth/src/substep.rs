@@ -20,6 +20,14 @@ use crate::energy::Vec3;
 /// strain rather than undoing the pass.
 pub(crate) const HELD_MASS: f64 = 100.0;
 
+/// The contact impulses of a substep's solve (its residual b − A Δv, zero off the
+/// constrained vertices to the solve's tolerance) and the time they act over, s.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Impulses<'a> {
+    pub impulse: &'a [Vec3],
+    pub span: f64,
+}
+
 /// The moving garment of one substep: start positions, and end positions and velocities the
 /// response changes.
 pub(crate) struct Substep<'a> {

@@ -31,7 +31,7 @@ use tailor_subdiv::{Point, StencilTable};
 use crate::constraint::{Contact, Filter};
 use crate::energy::Vec3;
 use crate::settings::Settings;
-use crate::substep::{Floor, Substep};
+use crate::substep::{Floor, Impulses, Substep};
 use crate::{ClothError, Model};
 
 /// The collision state of one simulator: the garment's hierarchy, the obstacle, and the
@@ -127,6 +127,19 @@ impl Collisions {
         self.friction.force()
     }
 
+    /// The sticking contacts whose grip in the solve's `residual` exceeds Coulomb's cone slide
+    /// within the substep (see [`Friction::slip`]); whether any did.
+    pub fn slip(
+        &mut self,
+        settings: &Settings,
+        residual: &[Vec3],
+        h: f64,
+        rhs: &mut [Vec3],
+    ) -> bool {
+        self.friction
+            .slip(&self.contacts, residual, settings.friction, h, rhs)
+    }
+
     /// Holds the sticking contacts' whole velocity in `filter`.
     pub fn stick(&self, filter: &mut Filter) {
         self.friction.stick(&self.contacts, filter);
@@ -181,11 +194,10 @@ impl Collisions {
     }
 
     /// Coulomb friction on the body contacts after the solve (step 2 of [`crate::response`],
-    /// see the `friction` module); `residual` is the linear solve's b − A Δv,
-    /// M (v̂ − v) + ĥ f at the end of the solve linearized.
-    pub fn friction(&mut self, settings: &Settings, residual: &[Vec3], motion: &mut Substep) {
+    /// see the `friction` module), from the solve's contact impulses.
+    pub fn friction(&mut self, settings: &Settings, contact: Impulses, motion: &mut Substep) {
         self.friction
-            .after_solve(&self.contacts, residual, settings.friction, motion);
+            .after_solve(&self.contacts, contact, settings.friction, motion);
     }
 
     /// Self repulsion (step 3 of [`crate::response`]) on `motion`; `moved` flags the vertices
