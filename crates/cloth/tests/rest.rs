@@ -14,8 +14,8 @@
 //! The disc is laid with up to a tenth of a millimetre of random height on its thickness
 //! above the pedestal, as a fabric is never quite flat. A perfectly flat disc on a round
 //! pedestal is a symmetric buckling problem, and which fold count it chooses was decided by
-//! round-off: seven folds at 2 substeps and eight at 5 and 10 (coefficients 0.586, 0.623,
-//! 0.626). Given a shape to buckle from, it settles alike at every substep.
+//! round-off: fewer, deeper folds at 2 substeps than the eight at 5 and 10 (coefficients
+//! 0.585, 0.612, 0.628). Given a shape to buckle from, it settles alike at every substep.
 
 use tailor_cloth::shapes::{cylinder, disc, drape_coefficient};
 use tailor_cloth::{Integrator, Material, Settings, Vec3};
