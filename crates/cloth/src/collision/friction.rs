@@ -270,6 +270,31 @@ mod tests {
         (contacts, Friction::new(4))
     }
 
+    /// [`Friction::after_solve`] for a solve of step `h` that ended the vertices of mass
+    /// `mass` at velocities `v` with contact impulses −`residual`; `x` are their positions.
+    fn after_solve(
+        friction: &mut Friction,
+        contacts: &[Contact],
+        residual: &[Vec3],
+        (mu, h, mass): (f64, f64, f64),
+        v: &mut [Vec3],
+        x: &mut [Point],
+    ) {
+        let x0 = x.to_vec();
+        let mut m = Substep {
+            h,
+            x0: &x0,
+            x,
+            v,
+            inverse_mass: &[1.0 / mass; 4],
+        };
+        let contact = Impulses {
+            impulse: residual,
+            span: h,
+        };
+        friction.after_solve(contacts, contact, mu, &mut m);
+    }
+
     #[test]
     fn coulombs_law_on_the_solve_impulses_decides_the_next_substep() {
         let (contacts, mut friction) = on_the_floor();
@@ -298,18 +323,8 @@ mod tests {
         let x0 = [Point::origin(); 4];
         let mut x = x0;
         let mut v = [0.0, 0.01, 0.0, 0.9].map(|x| Vec3::new(x, 0.0, 0.0));
-        let mut m = Substep {
-            h,
-            x0: &x0,
-            x: &mut x,
-            v: &mut v,
-            inverse_mass: &[1.0 / mass; 4],
-        };
-        let contact = Impulses {
-            impulse: &residual,
-            span: h,
-        };
-        friction.after_solve(&contacts, contact, mu, &mut m);
+        let step = (mu, h, mass);
+        after_solve(&mut friction, &contacts, &residual, step, &mut v, &mut x);
         assert_eq!(friction.state.stuck, [false, false, true, false]);
         assert_eq!(friction.state.lifted, [false, false, false, true]);
         assert_eq!(friction.state.normal_force, [10.0, 10.0, 10.0, 0.0]);
@@ -317,6 +332,7 @@ mod tests {
         assert_eq!(v[1], Vec3::new(0.01, 0.0, 0.0));
         assert_eq!(x, x0);
         // A sliding contact slowed to what unused friction removes sticks, losing it.
+        let pressed = [Vec3::new(0.0, -0.1, 0.0); 4];
         let (contacts, mut friction) = on_the_floor();
         friction.state.normal_force = vec![10.0; 4];
         let v0 = [Vec3::new(0.004, 0.0, 0.0); 4];
@@ -325,18 +341,7 @@ mod tests {
         assert_eq!(friction.state.stuck, [false; 4]);
         assert!((friction.force()[0] - Vec3::new(-0.8, 0.0, 0.0)).norm() < 1e-12);
         let mut v = [Vec3::new(0.003, 0.0, 0.0); 4];
-        let mut m = Substep {
-            h,
-            x0: &x0,
-            x: &mut x,
-            v: &mut v,
-            inverse_mass: &[1.0 / mass; 4],
-        };
-        let contact = Impulses {
-            impulse: &[Vec3::new(0.0, -0.1, 0.0); 4],
-            span: h,
-        };
-        friction.after_solve(&contacts, contact, mu, &mut m);
+        after_solve(&mut friction, &contacts, &pressed, step, &mut v, &mut x);
         // Unused: 0.05 − 0.8 · 0.01 = 0.042 N s, which stops 0.021 m/s; they slowed.
         assert_eq!(friction.state.stuck, [true; 4]);
         assert_eq!(v[0], Vec3::zeros());
@@ -345,18 +350,7 @@ mod tests {
         friction.state.normal_force = vec![10.0; 4];
         friction.prepare(&contacts, &v0, &[mass; 4], gravity, mu, h);
         let mut v = [Vec3::new(0.005, 0.0, 0.0); 4];
-        let mut m = Substep {
-            h,
-            x0: &x0,
-            x: &mut x,
-            v: &mut v,
-            inverse_mass: &[1.0 / mass; 4],
-        };
-        let contact = Impulses {
-            impulse: &[Vec3::new(0.0, -0.1, 0.0); 4],
-            span: h,
-        };
-        friction.after_solve(&contacts, contact, mu, &mut m);
+        after_solve(&mut friction, &contacts, &pressed, step, &mut v, &mut x);
         assert_eq!(friction.state.stuck, [false; 4]);
     }
 }
