@@ -229,6 +229,33 @@ fn slide_on_incline(slope: f64, mu: f64, frames: u32) -> (f64, f64, f64) {
     (velocity, moved, height)
 }
 
+/// A sheet laid on a floor: after its first substep, and after a later one, the normal forces
+/// its contacts carry into the next substep (friction's N) add up to its weight. The first
+/// substep is BDF2's trapezoidal start, whose contact impulses also cancel its explicit half:
+/// over the half step alone they would weigh the sheet twice.
+#[test]
+fn the_contacts_carry_the_weight_of_a_sheet_at_rest() {
+    let settings = Settings::default();
+    let garment = moved(
+        &centred_sheet(6, 0.3),
+        Vector3::new(0.0, settings.thickness, 0.0),
+    );
+    let (mut sim, mut state) = simulator(&garment, &Material::COTTON, settings);
+    let floor = block(Point::new(-5.0, -1.0, -5.0), Point::new(5.0, 0.0, 5.0));
+    set_obstacle(&mut sim, &floor);
+    let weight = sim.model().masses().iter().sum::<f64>() * 9.81;
+    for substeps in [1, 7] {
+        for _ in 0..substeps {
+            sim.step(&mut state, settings.max_substep).unwrap();
+        }
+        let carried: f64 = sim.contact_state().normal_force.iter().sum();
+        assert!(
+            (carried / weight - 1.0).abs() < 0.01,
+            "after {substeps} substeps: {carried} N carried, {weight} N weight"
+        );
+    }
+}
+
 #[test]
 fn friction_holds_a_sheet_on_a_gentle_incline_and_slows_it_on_a_steep_one() {
     // Coulomb: at rest while tan θ ≤ μ; else sliding at g (sin θ − μ cos θ). Half a second.
