@@ -395,4 +395,30 @@ mod tests {
             c.velocity
         );
     }
+
+    #[test]
+    fn gravity_draws_only_resting_vertices_into_contact_before_the_solve() {
+        // A floor whose top is y = 0; substeps of 1/48 s, over which gravity pulls a vertex
+        // at rest down by g h² = 4.3 mm; thickness 5 mm.
+        let floor = block(Point::new(-1.0, -1.0, -1.0), Point::new(1.0, 0.0, 1.0));
+        let mut obstacle = Obstacle::new(
+            floor.positions(),
+            floor.face_offsets(),
+            floor.face_vertices(),
+        )
+        .expect("a box");
+        let settings = Settings::default();
+        let h = 1.0 / 48.0;
+        obstacle.begin_substep(0.0, h);
+        // At rest 5.5 mm up (resting on the floor: gravity counts) and 7 mm up (not resting:
+        // it would take gravity's pull to the thickness; the second look is for that).
+        let x0 = [0.0055, 0.007].map(|y| Point::new(0.0, y, 0.0));
+        let v0 = [Vec3::zeros(); 2];
+        let mut contacts = Vec::new();
+        obstacle
+            .find_contacts(&settings, h, &x0, &v0, &mut [false; 2], &mut contacts)
+            .expect("finite");
+        let vertices: Vec<u32> = contacts.iter().map(|c| c.vertex).collect();
+        assert_eq!(vertices, [0]);
+    }
 }
