@@ -389,8 +389,12 @@ impl<'a> Shot<'a> {
             .with_context(in_cloth)?;
         let out = &scene.output;
         let cloth = Surface::new(&c.doc.mesh, out.level, out.limit_normals)?;
+        // At level 0 the written surface is the control mesh, which the simulator's own
+        // self-collision already keeps clear.
+        let refined = cloth.mesh();
+        let faces = (out.level > 0).then(|| (refined.face_offsets(), refined.face_vertices()));
         simulator
-            .set_collision_surface(cloth.stencils().clone())
+            .set_collision_surface(cloth.stencils().clone(), faces)
             .with_context(in_cloth)?;
         let body = match &scene.body {
             Some(b) => {

@@ -62,6 +62,13 @@
 //!    under two of three 1% changes of the CG tolerance), so step 4 runs again on the
 //!    positions steps 5 and 6 left, the vertices they moved a hundred times heavier, and the
 //!    projection once more for what that moved.
+//! 8. **The refined surface against itself** (`Layers::Surface`), with self-collision on and
+//!    when the caller gave the refined faces: the continuous self tests of step 4 run once
+//!    more on the points of the subdivided surface, their impulses and impact zones acting on
+//!    the control points through the stencils (the `collision::surface_layers` module), as in
+//!    step 7 on the positions the body passes left. The control mesh can be free of crossings
+//!    while the surface it defines is not: where a hem crumples, the refined faces of two
+//!    folds crossed on 12 of 61 frames of the 64² drape.
 //!
 //! Friction acts in the integrator's own solve (step 2 only changes the velocities of
 //! contacts that start to stick; see the `simulator` module). The other passes (strain
@@ -72,7 +79,7 @@
 use tailor_collide::CollideError;
 use tailor_subdiv::Point;
 
-use crate::collision::Collisions;
+use crate::collision::{Collisions, Layers};
 use crate::constraint::Contact;
 use crate::energy::Vec3;
 use crate::model::Springs;
@@ -240,10 +247,16 @@ impl Response {
             // Collision impulses stop features approaching at once, which strains the edges
             // around them: limit again after them, the cloth around taking up the slack.
             self.strain.around(springs, limit, &mut motion, &self.moved);
-            impacts += self.layer_impacts(settings, springs, &mut motion, false)?;
+            impacts +=
+                self.layer_impacts(settings, springs, &mut motion, false, Layers::Garment)?;
         }
+        // The vertices the body passes move, for the self passes after them.
+        self.moved.fill(false);
         if self.collisions.has_obstacle() {
             impacts += self.body_passes(settings, springs, &mut motion)?;
+        }
+        if settings.self_collision && self.collisions.has_surface_layers() {
+            impacts += self.recheck_layers(settings, springs, &mut motion, Layers::Surface)?;
         }
         // A vertex the passes left alone ends with the integrator's velocity; one they
         // changed (stopped by an impact, pushed, limited) with the velocity of its corrected
@@ -272,7 +285,11 @@ impl Response {
         springs: &Springs,
         motion: &mut Substep,
         pushed_heavier: bool,
+        which: Layers,
     ) -> Result<u32, CollideError> {
+        if which == Layers::Surface {
+            self.collisions.begin_surface_layers(motion.x0);
+        }
         let also = pushed_heavier.then_some(self.moved.as_slice());
         hold(
             &mut self.held,
@@ -285,7 +302,7 @@ impl Response {
         for _ in 0..IMPULSE_ROUNDS {
             let round = self
                 .collisions
-                .impulse_round(settings.thickness, &mut layers)?;
+                .impulse_round(which, settings.thickness, &mut layers)?;
             let Some((count, touched)) = round else {
                 return Ok(handled);
             };
@@ -293,7 +310,7 @@ impl Response {
             self.strain
                 .around(springs, settings.strain_limit, &mut layers, touched);
         }
-        Ok(handled + self.collisions.impact_zones(&mut layers)?)
+        Ok(handled + self.collisions.impact_zones(which, &mut layers)?)
     }
 
     /// Steps 5–7: the body impacts and projection, the refined surface's lift, strain limiting
@@ -324,7 +341,7 @@ impl Response {
         }
         resolved += lifted;
         if settings.self_collision && pushed > 0 {
-            resolved += self.recheck_layers(settings, springs, motion)?;
+            resolved += self.recheck_layers(settings, springs, motion, Layers::Garment)?;
             resolved += self.collisions.project(thickness, motion)?;
         }
         Ok(resolved)
@@ -357,6 +374,7 @@ impl Response {
         settings: &Settings,
         springs: &Springs,
         motion: &mut Substep,
+        which: Layers,
     ) -> Result<u32, CollideError> {
         let h = motion.h;
         self.own_velocity.clear();
@@ -366,7 +384,7 @@ impl Response {
         }
         self.reaching.clear();
         self.reaching.extend_from_slice(motion.v);
-        let resolved = self.layer_impacts(settings, springs, motion, true)?;
+        let resolved = self.layer_impacts(settings, springs, motion, true, which)?;
         for ((v, own), reaching) in motion
             .v
             .iter_mut()

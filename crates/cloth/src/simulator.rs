@@ -414,9 +414,21 @@ impl Simulator {
     /// control points: after the other collision passes of each substep the control points
     /// are lifted until every refined point is at least the thickness from the obstacle.
     ///
+    /// Given the refined surface's `faces` (CSR face offsets and face vertices, over the
+    /// refined points in the stencils' order), and with self-collision on, that surface is
+    /// also kept from passing through itself: the continuous self tests run on the refined
+    /// points, their impulses and impact zones acting on the control points through the
+    /// stencils (step 8 of the response).
+    ///
     /// # Errors
-    /// [`ClothError::WrongLength`] when the table is not over this garment's control points.
-    pub fn set_collision_surface(&mut self, stencils: StencilTable) -> Result<(), ClothError> {
+    /// [`ClothError::WrongLength`] when the table is not over this garment's control points;
+    /// [`ClothError::Collide`] when the faces cannot carry a collision hierarchy (an index past
+    /// the stencils' rows, a face of fewer than three vertices).
+    pub fn set_collision_surface(
+        &mut self,
+        stencils: StencilTable,
+        faces: Option<(&[u32], &[u32])>,
+    ) -> Result<(), ClothError> {
         let expected = self.model.vertex_count();
         if stencils.control_points != expected {
             return Err(ClothError::WrongLength {
@@ -425,7 +437,10 @@ impl Simulator {
                 expected,
             });
         }
-        self.response.collisions_mut().set_surface(stencils);
+        let faces = faces.filter(|_| self.settings.self_collision);
+        self.response
+            .collisions_mut()
+            .set_surface(stencils, faces, &self.model.rest)?;
         Ok(())
     }
 

@@ -77,17 +77,17 @@ impl Substep<'_> {
 
     /// Applies the impulse along unit `normal` that brings the relative normal velocity
     /// Σ αₖ vₖ · n of `vertices` up to `target`, if it is below; each vertex's share is
-    /// αₖ / mₖ. Returns whether it changed anything.
+    /// αₖ / mₖ. Each vertex is listed once. Returns whether it changed anything.
     pub fn push_apart(
         &mut self,
-        vertices: [u32; 4],
-        alpha: [f64; 4],
+        vertices: &[u32],
+        alpha: &[f64],
         normal: Vec3,
         target: f64,
     ) -> bool {
         let mut relative = 0.0;
         let mut weight = 0.0;
-        for (&k, &a) in vertices.iter().zip(&alpha) {
+        for (&k, &a) in vertices.iter().zip(alpha) {
             relative += a * self.v[k as usize].dot(&normal);
             weight += a * a * self.inverse_mass[k as usize];
         }
@@ -95,7 +95,7 @@ impl Substep<'_> {
             return false;
         }
         let impulse = (target - relative) / weight;
-        for (&k, &a) in vertices.iter().zip(&alpha) {
+        for (&k, &a) in vertices.iter().zip(alpha) {
             let k = k as usize;
             self.v[k] += normal * (a * impulse * self.inverse_mass[k]);
         }

@@ -372,7 +372,7 @@ fn drape_surface_clearance(frames: u32, with_surface: bool) -> (f64, f64) {
     let (mut sim, mut state) = simulator(&garment, &Material::COTTON, settings);
     set_obstacle(&mut sim, &ball);
     if with_surface {
-        sim.set_collision_surface(stencils.clone()).unwrap();
+        sim.set_collision_surface(stencils.clone(), None).unwrap();
     }
     let mut ball_hierarchy = hierarchy(&ball);
     ball_hierarchy.refit(ball.positions(), 0.0).unwrap();

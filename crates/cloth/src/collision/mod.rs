@@ -19,11 +19,13 @@ mod friction;
 mod obstacle;
 mod self_collision;
 mod surface;
+mod surface_layers;
 
 pub use friction::ContactState;
 use friction::Friction;
 use obstacle::Obstacle;
 use surface::Surface;
+use surface_layers::SurfaceLayers;
 
 use tailor_collide::{CollideError, Hierarchy};
 use tailor_subdiv::{Point, StencilTable};
@@ -33,6 +35,15 @@ use crate::energy::Vec3;
 use crate::settings::Settings;
 use crate::substep::{Floor, Impulses, Substep};
 use crate::{ClothError, Model};
+
+/// Which surface the self-collision passes keep from passing through itself.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Layers {
+    /// The control mesh.
+    Garment,
+    /// The refined surface that renders ([`surface_layers`]).
+    Surface,
+}
 
 /// The collision state of one simulator: the garment's hierarchy, the obstacle, and the
 /// buffers of the current substep.
@@ -97,9 +108,33 @@ impl Collisions {
         }
     }
 
-    /// Makes the refined surface `stencils` evaluates the one that must clear the obstacle.
-    pub fn set_surface(&mut self, stencils: StencilTable) {
-        self.surface = Some(Surface::new(stencils));
+    /// Makes the refined surface `stencils` evaluates the one that must clear the obstacle,
+    /// and with `faces` (its CSR face offsets and vertices) itself too ([`surface_layers`]),
+    /// its hierarchy built at the garment's `rest` positions.
+    pub fn set_surface(
+        &mut self,
+        stencils: StencilTable,
+        faces: Option<(&[u32], &[u32])>,
+        rest: &[Point],
+    ) -> Result<(), CollideError> {
+        let layers = faces
+            .map(|(offsets, vertices)| SurfaceLayers::new(&stencils, rest, offsets, vertices))
+            .transpose()?;
+        self.surface = Some(Surface::new(stencils, layers));
+        Ok(())
+    }
+
+    /// Whether the refined surface must clear itself.
+    pub fn has_surface_layers(&self) -> bool {
+        self.surface.as_ref().is_some_and(Surface::has_layers)
+    }
+
+    /// The refined surface's positions at the substep's start `x0`, for the
+    /// [`Layers::Surface`] passes that follow.
+    pub fn begin_surface_layers(&mut self, x0: &[Point]) {
+        if let Some((stencils, layers)) = self.surface.as_mut().and_then(Surface::layers) {
+            layers.begin(stencils, x0);
+        }
     }
 
     /// Whether there is an obstacle.
@@ -211,21 +246,42 @@ impl Collisions {
         self_collision::repel(&mut self.cloth, thickness, motion, &mut self.layers, moved)
     }
 
-    /// One round of self-impact impulses (step 4 of [`crate::response`], see
-    /// [`self_collision::impulse_round`]): `None` when there was no impact, else how many it
-    /// handled and the vertices it changed.
+    /// One round of self-impact impulses of `layers` (steps 4 and 8 of [`crate::response`],
+    /// see [`self_collision::impulse_round`]): `None` when there was no impact, else how many
+    /// it handled and the control points it changed.
     pub fn impulse_round(
         &mut self,
+        layers: Layers,
         thickness: f64,
         motion: &mut Substep,
     ) -> Result<Option<(u32, &[bool])>, CollideError> {
-        self_collision::impulse_round(&mut self.cloth, thickness, motion, &mut self.layers)
+        match layers {
+            Layers::Garment => {
+                self_collision::impulse_round(&mut self.cloth, thickness, motion, &mut self.layers)
+            }
+            Layers::Surface => match self.surface.as_mut().and_then(Surface::layers) {
+                Some((stencils, surface)) => surface.impulse_round(stencils, thickness, motion),
+                None => Ok(None),
+            },
+        }
     }
 
-    /// The impact zones that end step 4 of [`crate::response`] (see
+    /// The impact zones that end steps 4 and 8 of [`crate::response`] for `layers` (see
     /// [`self_collision::impact_zones`]); returns how many merges they made.
-    pub fn impact_zones(&mut self, motion: &mut Substep) -> Result<u32, CollideError> {
-        self_collision::impact_zones(&mut self.cloth, motion, &mut self.layers)
+    pub fn impact_zones(
+        &mut self,
+        layers: Layers,
+        motion: &mut Substep,
+    ) -> Result<u32, CollideError> {
+        match layers {
+            Layers::Garment => {
+                self_collision::impact_zones(&mut self.cloth, motion, &mut self.layers)
+            }
+            Layers::Surface => match self.surface.as_mut().and_then(Surface::layers) {
+                Some((stencils, surface)) => surface.impact_zones(stencils, motion),
+                None => Ok(0),
+            },
+        }
     }
 
     /// Body impacts, then the projection (step 5 of [`crate::response`]); returns how many

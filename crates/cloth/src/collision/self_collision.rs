@@ -51,14 +51,14 @@ use crate::energy::Vec3;
 use crate::substep::Substep;
 
 /// Rounds of impact-zone merging before giving up (each merges at least two zones).
-const ZONE_ROUNDS: usize = 64;
+pub(super) const ZONE_ROUNDS: usize = 64;
 
 /// Within how many thicknesses of each other in the rest shape a vertex and a face joined by
 /// the surface do not repel (PhysBAM's default factor; see the module docs).
 const REST_MARGIN: f64 = 1.5;
 
 /// Fraction of the thickness two colliding points are set to separate by.
-const SEPARATION: f64 = 0.1;
+pub(super) const SEPARATION: f64 = 0.1;
 
 /// The answers of the self-collision queries, kept from substep to substep so that each query
 /// refills them instead of allocating, and the pairs repulsion leaves alone.
@@ -116,8 +116,8 @@ pub(super) fn repel(
             let w = c.barycentric;
             let target = SEPARATION * (thickness - c.distance) / m.h;
             if m.push_apart(
-                [p as u32, a, b, d],
-                [1.0, -w[0], -w[1], -w[2]],
+                &[p as u32, a, b, d],
+                &[1.0, -w[0], -w[1], -w[2]],
                 normal,
                 target,
             ) {
@@ -137,17 +137,19 @@ pub(super) fn repel(
 
 /// One contact of the continuous query as four weighted vertices and a unit normal at the
 /// time of contact.
-struct Pair {
-    vertices: [u32; 4],
-    alpha: [f64; 4],
-    time: f64,
+pub(super) struct Pair {
+    pub vertices: [u32; 4],
+    pub alpha: [f64; 4],
+    /// The time of contact, a fraction of the substep.
+    pub time: f64,
     /// Vertex–triangle (else edge–edge).
-    triangle: bool,
+    pub triangle: bool,
 }
 
 impl Pair {
-    fn list(cloth: &Hierarchy, impacts: &Impacts) -> impl Iterator<Item = Self> {
-        let triangles = cloth.triangles();
+    /// The impacts of `mesh`'s last query.
+    pub fn list(mesh: &Hierarchy, impacts: &Impacts) -> impl Iterator<Item = Self> {
+        let triangles = mesh.triangles();
         let vt = impacts.vertex_triangle.iter().map(|i| {
             let [a, b, c] = triangles[i.triangle as usize];
             let w = i.barycentric;
@@ -172,20 +174,21 @@ impl Pair {
     }
 
     /// Σ αₖ pₖ over positions `p`.
-    fn combine(&self, p: impl Fn(usize) -> Vec3) -> Vec3 {
+    fn combine(&self, p: &[Point]) -> Vec3 {
         self.vertices
             .iter()
             .zip(&self.alpha)
-            .map(|(&k, &a)| p(k as usize) * a)
+            .map(|(&k, &a)| p[k as usize].coords * a)
             .sum()
     }
 
-    /// The contact normal at the time of impact, pointing the way the first feature was
-    /// relative to the second at the start; `None` when it is undefined.
-    fn normal(&self, m: &Substep) -> Option<Vec3> {
+    /// The contact normal at the time of impact of the motion from `x0` to `x`, pointing the
+    /// way the first feature was relative to the second at the start, and the features' gap
+    /// along it at the start; `None` when the normal is undefined.
+    pub fn normal_and_gap(&self, x0: &[Point], x: &[Point]) -> Option<(Vec3, f64)> {
         let at = |k: u32| {
             let k = k as usize;
-            m.x0[k] + (m.x[k] - m.x0[k]) * self.time
+            x0[k] + (x[k] - x0[k]) * self.time
         };
         let [a, b, c, d] = self.vertices.map(at);
         let n = if self.triangle {
@@ -193,10 +196,11 @@ impl Pair {
         } else {
             (b - a).cross(&(d - c))
         };
-        let start = self.combine(|k| m.x0[k].coords);
+        let start = self.combine(x0);
         let n = if n.norm() > 0.0 { n } else { start };
         let n = n.try_normalize(0.0)?;
-        Some(if start.dot(&n) < 0.0 { -n } else { n })
+        let n = if start.dot(&n) < 0.0 { -n } else { n };
+        Some((n, start.dot(&n)))
     }
 }
 
@@ -224,12 +228,11 @@ pub(super) fn impulse_round<'a>(
     touched.fill(false);
     let mut handled = 0;
     for pair in Pair::list(cloth, impacts) {
-        let Some(normal) = pair.normal(m) else {
+        let Some((normal, gap)) = pair.normal_and_gap(m.x0, m.x) else {
             continue;
         };
-        let gap = pair.combine(|k| m.x0[k].coords).dot(&normal);
         let target = (SEPARATION * thickness - gap) / m.h;
-        if m.push_apart(pair.vertices, pair.alpha, normal, target) {
+        if m.push_apart(&pair.vertices, &pair.alpha, normal, target) {
             for &k in &pair.vertices {
                 touched[k as usize] = true;
             }
@@ -240,66 +243,103 @@ pub(super) fn impulse_round<'a>(
     Ok(Some((handled, touched)))
 }
 
-/// Merges the vertices of every remaining impact into zones that move with their mean
-/// velocity (momentum kept), or with the mean velocity of the vertices in them whose motion
-/// is prescribed (pins, attachments), until no impact is left. A zone translates rigidly, so
-/// two of its features cannot meet during the substep if they did not touch at its start.
+/// Merges the vertices of every remaining impact into zones that move together ([`Zones`]),
+/// until no impact is left.
 pub(super) fn impact_zones(
     cloth: &mut Hierarchy,
     m: &mut Substep,
     buffers: &mut Buffers,
 ) -> Result<u32, CollideError> {
     let impacts = &mut buffers.impacts;
-    let n = m.v.len();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    let root = |parent: &mut Vec<u32>, mut k: u32| {
-        while parent[k as usize] != k {
-            let up = parent[parent[k as usize] as usize];
-            parent[k as usize] = up;
-            k = up;
-        }
-        k
-    };
-    let mut merged = 0;
+    let mut zones = Zones::new(m.v.len());
     for _ in 0..ZONE_ROUNDS {
         cloth.refit_swept(m.x0, m.x, 0.0)?;
         cloth.self_impacts_into(impacts);
-        let mut changed = false;
+        let before = zones.merged;
         for pair in Pair::list(cloth, impacts) {
-            let first = root(&mut parent, pair.vertices[0]);
-            for &k in &pair.vertices[1..] {
-                let other = root(&mut parent, k);
-                if other != first {
-                    let (lo, hi) = (first.min(other), first.max(other));
-                    parent[hi as usize] = lo;
-                    changed = true;
-                    merged += 1;
-                }
-            }
+            zones.merge_all(&pair.vertices);
         }
-        if !changed {
+        if zones.merged == before {
             break;
         }
-        // A zone moves with the mean velocity of its movable vertices (momentum kept), or,
-        // when it holds vertices whose motion is prescribed, with theirs.
-        let mut momentum = vec![(Vec3::zeros(), 0.0); n];
-        let mut held = vec![(Vec3::zeros(), 0u32); n];
+        zones.move_together(m);
+    }
+    Ok(zones.merged)
+}
+
+/// Impact zones (Bridson et al. §7.4): sets of vertices, merged as impacts join them, that
+/// move with one velocity, the mean of their movable vertices' (momentum kept), or, when a
+/// zone holds vertices whose motion is prescribed (pins, attachments), the mean of theirs.
+/// A zone translates rigidly, so two of its features cannot meet during the substep if they
+/// did not touch at its start; the zones here translate rather than rotate.
+pub(super) struct Zones {
+    parent: Vec<u32>,
+    /// How many merges were made.
+    pub merged: u32,
+    momentum: Vec<(Vec3, f64)>,
+    held: Vec<(Vec3, u32)>,
+}
+
+impl Zones {
+    /// Every one of `n` vertices its own zone.
+    pub fn new(n: usize) -> Self {
+        Self {
+            parent: (0..n as u32).collect(),
+            merged: 0,
+            momentum: Vec::new(),
+            held: Vec::new(),
+        }
+    }
+
+    fn root(&mut self, mut k: u32) -> u32 {
+        while self.parent[k as usize] != k {
+            let up = self.parent[self.parent[k as usize] as usize];
+            self.parent[k as usize] = up;
+            k = up;
+        }
+        k
+    }
+
+    /// Puts `vertices` in one zone.
+    pub fn merge_all(&mut self, vertices: &[u32]) {
+        let Some((&first, rest)) = vertices.split_first() else {
+            return;
+        };
+        let mut first = self.root(first);
+        for &k in rest {
+            let other = self.root(k);
+            if other != first {
+                let (lo, hi) = (first.min(other), first.max(other));
+                self.parent[hi as usize] = lo;
+                first = lo;
+                self.merged += 1;
+            }
+        }
+    }
+
+    /// Gives every vertex its zone's velocity, and positions from velocities.
+    pub fn move_together(&mut self, m: &mut Substep) {
+        let n = m.v.len();
+        self.momentum.clear();
+        self.momentum.resize(n, (Vec3::zeros(), 0.0));
+        self.held.clear();
+        self.held.resize(n, (Vec3::zeros(), 0));
         for k in 0..n {
-            let r = root(&mut parent, k as u32) as usize;
+            let r = self.root(k as u32) as usize;
             let inverse = m.inverse_mass[k];
             if inverse > 0.0 {
-                momentum[r].0 += m.v[k] / inverse;
-                momentum[r].1 += 1.0 / inverse;
+                self.momentum[r].0 += m.v[k] / inverse;
+                self.momentum[r].1 += 1.0 / inverse;
             } else {
-                held[r].0 += m.v[k];
-                held[r].1 += 1;
+                self.held[r].0 += m.v[k];
+                self.held[r].1 += 1;
             }
         }
         for k in 0..n {
             if m.inverse_mass[k] > 0.0 {
-                let r = root(&mut parent, k as u32) as usize;
-                let (p, mass) = momentum[r];
-                let (v, count) = held[r];
+                let r = self.root(k as u32) as usize;
+                let (p, mass) = self.momentum[r];
+                let (v, count) = self.held[r];
                 m.v[k] = if count > 0 {
                     v / f64::from(count)
                 } else {
@@ -309,5 +349,4 @@ pub(super) fn impact_zones(
         }
         m.sync_positions();
     }
-    Ok(merged)
 }

@@ -22,6 +22,7 @@ use tailor_collide::{CollideError, Hierarchy};
 use tailor_subdiv::{Point, StencilTable};
 
 use super::obstacle::away_from;
+use super::surface_layers::SurfaceLayers;
 use crate::energy::Vec3;
 use crate::substep::Substep;
 
@@ -39,6 +40,8 @@ const SLACK: f64 = 0.01;
 #[derive(Clone, Debug)]
 pub(crate) struct Surface {
     stencils: StencilTable,
+    /// The refined faces, when the surface must not pass through itself either.
+    layers: Option<SurfaceLayers>,
     points: Vec<Point>,
     /// Per control point: weighted sums of requested moves and of body velocities, and of the
     /// weights.
@@ -48,11 +51,13 @@ pub(crate) struct Surface {
 }
 
 impl Surface {
-    pub fn new(stencils: StencilTable) -> Self {
+    /// The surface `stencils` evaluates, with `layers` its faces when it must clear itself.
+    pub fn new(stencils: StencilTable, layers: Option<SurfaceLayers>) -> Self {
         let n = stencils.control_points;
         Self {
             points: vec![Point::origin(); stencils.len()],
             stencils,
+            layers,
             lift: vec![Vec3::zeros(); n],
             body: vec![Vec3::zeros(); n],
             weight: vec![0.0; n],
@@ -124,5 +129,16 @@ impl Surface {
             }
         }
         Ok(moved)
+    }
+
+    /// The stencils, and the refined faces when the surface must clear itself.
+    pub fn layers(&mut self) -> Option<(&StencilTable, &mut SurfaceLayers)> {
+        let stencils = &self.stencils;
+        self.layers.as_mut().map(|layers| (stencils, layers))
+    }
+
+    /// Whether the surface must clear itself.
+    pub fn has_layers(&self) -> bool {
+        self.layers.is_some()
     }
 }
