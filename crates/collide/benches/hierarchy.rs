@@ -17,7 +17,7 @@ use divan::Bencher;
 use parry3d_f64::partitioning::BvhWorkspace;
 use parry3d_f64::query::PointQuery;
 use rayon::prelude::*;
-use shapes::{SHAPES, glam, parry, shape, sizes, tailor, waving_sheet};
+use shapes::{SHAPES, glam, parry, parry_boxes, parry_pairs, shape, sizes, tailor, waving_sheet};
 use tailor_collide::Point;
 
 /// Seconds after which a benchmark stops sampling.
@@ -140,16 +140,21 @@ mod self_collision {
         bencher.bench(|| h.self_impacts());
     }
 
+    /// Over the boxes at the end of the step, the ones the intersections pair.
     #[divan::bench(args = sizes(), consts = [0, 1, 2])]
     fn parry_bvh_self_traversal<const SHAPE: usize>(bencher: Bencher, triangles: usize) {
         let (m, frames) = shape(SHAPES[SHAPE], triangles);
-        let mesh = parry(&m, &frames[1]);
+        let bvh = parry_boxes(&m, &[&frames[1]], 0.0);
         let mut workspace = BvhWorkspace::default();
-        bencher.bench_local(|| {
-            let mut pairs = 0usize;
-            mesh.bvh()
-                .traverse_bvtt_single_tree::<false>(&mut workspace, &mut |_, _| pairs += 1);
-            pairs
-        });
+        bencher.bench_local(|| parry_pairs(&bvh, &mut workspace));
+    }
+
+    /// Over the boxes swept over the step, the ones the impacts pair.
+    #[divan::bench(args = sizes(), consts = [0, 1, 2])]
+    fn parry_bvh_swept_self_traversal<const SHAPE: usize>(bencher: Bencher, triangles: usize) {
+        let (m, frames) = shape(SHAPES[SHAPE], triangles);
+        let bvh = parry_boxes(&m, &[&frames[0], &frames[1]], 0.0);
+        let mut workspace = BvhWorkspace::default();
+        bencher.bench_local(|| parry_pairs(&bvh, &mut workspace));
     }
 }

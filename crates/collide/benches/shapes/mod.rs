@@ -1,6 +1,8 @@
 //! The deforming meshes both benchmarks run on, built the same way for tailor and parry.
 
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::math::Vector as DVec3;
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 use parry3d_f64::shape::{TriMesh, TriMeshFlags};
 use tailor_collide::{Hierarchy, Point};
 
@@ -83,4 +85,30 @@ pub fn parry(m: &Mesh, positions: &[Point]) -> TriMesh {
         .map(|t| [t[0], t[1], t[2]])
         .collect();
     TriMesh::with_flags(glam(positions), indices, TriMeshFlags::DEFORMABLE).unwrap()
+}
+
+/// Parry's `Bvh` (binned build) over the boxes of the triangles of `m` (already triangulated)
+/// around their corners in every one of `frames`, each loosened by `pad`: the boxes that a
+/// self-query over that motion, within a distance of `2 pad`, must pair up. The swept boxes of
+/// a step for continuous impacts, the end positions for intersections, and those loosened by
+/// half the thickness for proximity, as tailor's traversal compares them.
+pub fn parry_boxes(m: &Mesh, frames: &[&[Point]], pad: f64) -> Bvh {
+    let frames: Vec<Vec<DVec3>> = frames.iter().map(|f| glam(f)).collect();
+    let leaves: Vec<Aabb> = m
+        .corners
+        .chunks_exact(3)
+        .map(|t| {
+            let corners = frames.iter().flat_map(|f| t.iter().map(|&v| f[v as usize]));
+            Aabb::from_points(corners).loosened(pad)
+        })
+        .collect();
+    Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves)
+}
+
+/// The number of pairs of leaves of `bvh` whose boxes overlap: parry's sequential
+/// self-traversal, with no test on the pairs.
+pub fn parry_pairs(bvh: &Bvh, workspace: &mut BvhWorkspace) -> usize {
+    let mut pairs = 0usize;
+    bvh.traverse_bvtt_single_tree::<false>(workspace, &mut |_, _| pairs += 1);
+    pairs
 }
