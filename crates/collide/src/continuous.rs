@@ -13,7 +13,7 @@
 
 use parry3d_f64::math::Vector as DVec3;
 
-use crate::ccd::{CONTACT_SLACK, edge_edge, vertex_triangle};
+use crate::ccd::{edge_edge, vertex_triangle};
 use crate::cones::NormalCones;
 use crate::hierarchy::Hierarchy;
 use crate::traverse::{cross_pairs, self_pairs};
@@ -107,14 +107,7 @@ impl Hierarchy {
             }
             edges_against_edges(self, f, self, g, true, out);
         };
-        out.refill(self_pairs(
-            self,
-            Some(&cones),
-            true,
-            CONTACT_SLACK,
-            0.0,
-            &visit,
-        ));
+        out.refill(self_pairs(self, Some(&cones), true, 0.0, &visit));
     }
 
     /// Every vertex–triangle and edge–edge contact between this mesh and `other` during the
@@ -133,7 +126,7 @@ impl Hierarchy {
             vertices_against_face(other, g, self, f, false, Found::TriangleVertex, out);
             edges_against_edges(self, f, other, g, false, out);
         };
-        out.refill(cross_pairs(self, other, CONTACT_SLACK, &visit));
+        out.refill(cross_pairs(self, other, &visit));
     }
 
     /// The vertices of this mesh touching triangles of `other` during the motions of their
@@ -153,7 +146,7 @@ impl Hierarchy {
             vertices_against_face(self, f, other, g, false, |i| i, out);
         };
         out.clear();
-        out.append(&mut cross_pairs(self, other, CONTACT_SLACK, &visit));
+        out.append(&mut cross_pairs(self, other, &visit));
         sort_vertex_triangle(out);
     }
 }
