@@ -299,7 +299,10 @@ mod tests {
         let (mut rejected, mut meeting) = (0, 0);
         for _ in 0..20_000 {
             let mut corner = || DVec3::new(next(5), next(5), next(3) * 0.5) * 0.25;
-            let (p, q) = ([corner(), corner(), corner()], [corner(), corner(), corner()]);
+            let (p, q) = (
+                [corner(), corner(), corner()],
+                [corner(), corner(), corner()],
+            );
             let exact = triangles_meet_exact(p, q);
             assert_eq!(triangles_meet(p, q), exact, "{p:?} {q:?}");
             meeting += usize::from(exact);
