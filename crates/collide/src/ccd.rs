@@ -23,9 +23,12 @@
 //! axis by more than the touching tolerance (Bridson et al. box every primitive over the step),
 //! or the direction between their closest points at the start still separates them by that
 //! much at the end, hence throughout (neighbours on a smooth surface moving together, whose
-//! swept boxes overlap: a separating axis for linearly moving points), or the cubic's Bernstein coefficients on `[0, 1]` all have one sign, so the four points
-//! never become coplanar (the coplanarity filter of Tang, Manocha & Tong, "Fast continuous
-//! collision detection using deforming non-penetration filters", I3D 2010).
+//! swept boxes overlap: a separating axis for linearly moving points), or the cubic's
+//! Bernstein coefficients on `[0, 1]` all have one sign, so the four points never become
+//! coplanar (the coplanarity filter of Tang, Manocha & Tong, "Fast continuous collision
+//! detection using deforming non-penetration filters", I3D 2010). A caller pairing many
+//! primitives boxes each once ([`swept`]) and applies the first filter to the boxes
+//! ([`apart_boxes`]) before the `_unboxed` tests, with the same bits as the tests here.
 //! Candidate times live on the stack and are tested in ascending order as the bisection finds
 //! them, so a pair that touches at its first root is not bisected further.
 
@@ -85,10 +88,15 @@ fn at(p: Path, t: f64) -> DVec3 {
 
 /// [`vertex_triangle_impact`] on glam vectors.
 pub(crate) fn vertex_triangle(p: Path, tri: [Path; 3]) -> Option<(f64, [f64; 3])> {
-    let paths = [tri[0], tri[1], tri[2], p];
-    if apart(&paths, 3) {
+    if apart(&[tri[0], tri[1], tri[2], p], 3) {
         return None;
     }
+    vertex_triangle_unboxed(p, tri)
+}
+
+/// [`vertex_triangle`] past the box filter, for a caller that has applied it ([`apart_boxes`]).
+pub(crate) fn vertex_triangle_unboxed(p: Path, tri: [Path; 3]) -> Option<(f64, [f64; 3])> {
+    let paths = [tri[0], tri[1], tri[2], p];
     let [a, b, c] = tri.map(|x| x[0]);
     let nearest = Triangle::new(a, b, c)
         .project_local_point(p[0], false)
@@ -123,10 +131,15 @@ fn vertex_triangle_exact(p: Path, tri: [Path; 3]) -> Option<(f64, [f64; 3])> {
 
 /// [`edge_edge_impact`] on glam vectors.
 pub(crate) fn edge_edge(e: [Path; 2], f: [Path; 2]) -> Option<(f64, [f64; 2])> {
-    let paths = [e[0], e[1], f[0], f[1]];
-    if apart(&paths, 2) {
+    if apart(&[e[0], e[1], f[0], f[1]], 2) {
         return None;
     }
+    edge_edge_unboxed(e, f)
+}
+
+/// [`edge_edge`] past the box filter, for a caller that has applied it ([`apart_boxes`]).
+pub(crate) fn edge_edge_unboxed(e: [Path; 2], f: [Path; 2]) -> Option<(f64, [f64; 2])> {
+    let paths = [e[0], e[1], f[0], f[1]];
     let (s, u, _) = segment_closest(e[0][0], e[1][0], f[0][0], f[1][0]);
     let gap = (f[0][0] + (f[1][0] - f[0][0]) * u) - (e[0][0] + (e[1][0] - e[0][0]) * s);
     if apart_along(&paths, 2, gap) {
@@ -158,13 +171,24 @@ fn edge_edge_exact(e: [Path; 2], f: [Path; 2]) -> Option<(f64, [f64; 2])> {
 /// some axis than any two points the exact tests would call touching: then no candidate time
 /// can pass them (a separating axis among the coordinate axes, per pair of primitives).
 fn apart<const N: usize>(paths: &[Path; N], split: usize) -> bool {
-    let bound = |paths: &[Path]| {
-        let points = paths.iter().flatten();
-        let lo = points.clone().fold(DVec3::INFINITY, |m, &x| m.min(x));
-        let hi = points.fold(DVec3::NEG_INFINITY, |m, &x| m.max(x));
-        (lo, hi)
-    };
-    let ((alo, ahi), (blo, bhi)) = (bound(&paths[..split]), bound(&paths[split..]));
+    apart_boxes(swept(&paths[..split]), swept(&paths[split..]))
+}
+
+/// The box `[lo, hi]` swept by linearly moving points over the step: around their start and
+/// end positions.
+pub(crate) type Swept = [DVec3; 2];
+
+/// The [`Swept`] box of `paths`. Minima and maxima round nothing, so the box of a union is the
+/// union of the boxes, bit for bit: a caller may box each primitive once and pair the boxes.
+pub(crate) fn swept(paths: &[Path]) -> Swept {
+    let points = paths.iter().flatten();
+    let lo = points.clone().fold(DVec3::INFINITY, |m, &x| m.min(x));
+    let hi = points.fold(DVec3::NEG_INFINITY, |m, &x| m.max(x));
+    [lo, hi]
+}
+
+/// [`apart`] on the swept boxes of the two primitives.
+pub(crate) fn apart_boxes([alo, ahi]: Swept, [blo, bhi]: Swept) -> bool {
     let gap = (blo - ahi).max(alo - bhi);
     gap.max_element() > reach(alo.min(blo), ahi.max(bhi))
 }
