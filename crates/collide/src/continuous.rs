@@ -157,7 +157,8 @@ fn path(h: &Hierarchy, v: u32) -> [DVec3; 2] {
 }
 
 /// The vertices owned by face `f` of `hv` against the triangles of face `g` of `ht`. Each
-/// triangle is boxed once for all the vertices (see [`crate::ccd`]).
+/// triangle is boxed once for all the vertices (see [`crate::ccd`]), and not at all when `f`
+/// owns none (a vertex belongs to the first of its faces).
 fn vertices_against_face<T>(
     hv: &Hierarchy,
     f: u32,
@@ -167,11 +168,15 @@ fn vertices_against_face<T>(
     wrap: fn(VertexTriangleImpact) -> T,
     out: &mut Vec<T>,
 ) {
+    let owned = hv.topology.owned_vertices(f);
+    if owned.is_empty() {
+        return;
+    }
     for t in ht.topology.face_triangles(g) {
         let corners = ht.topology.triangles[t];
         let triangle = corners.map(|c| path(ht, c));
         let around = swept(&triangle);
-        for &v in hv.topology.owned_vertices(f) {
+        for &v in owned {
             if same_mesh && corners.contains(&v) {
                 continue;
             }
