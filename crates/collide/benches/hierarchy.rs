@@ -1,5 +1,6 @@
 //! Build, refit, proximity and self-collision on deforming meshes (a waving sheet, a bending
-//! tube; self-collision also on a sheet rolling up) of 10k and 100k triangles (1M with `TAILOR_BENCH_1M=1`), against parry's `TriMesh`
+//! tube; self-collision also on a sheet rolling up and on a folded, wrinkled drape of quads)
+//! of 10k and 100k triangles (1M with `TAILOR_BENCH_1M=1`), against parry's `TriMesh`
 //! with `TriMeshFlags::DEFORMABLE` (refit through `set_vertices`, point projection) and parry's
 //! `Bvh` self-traversal, in the same run. Both sides get the same triangles. Before the timings
 //! it prints the hierarchy's heap bytes per face at each size.
@@ -17,7 +18,7 @@ use divan::Bencher;
 use parry3d_f64::partitioning::BvhWorkspace;
 use parry3d_f64::query::PointQuery;
 use rayon::prelude::*;
-use shapes::{SHAPES, glam, parry, shape, sizes, tailor, waving_sheet};
+use shapes::{SHAPES, glam, parry, parry_boxes, parry_pairs, shape, sizes, tailor, waving_sheet};
 use tailor_collide::Point;
 
 /// Seconds after which a benchmark stops sampling.
@@ -125,14 +126,14 @@ mod proximity {
 mod self_collision {
     use super::*;
 
-    #[divan::bench(args = sizes(), consts = [0, 1, 2])]
+    #[divan::bench(args = sizes(), consts = [0, 1, 2, 3])]
     fn tailor_self_intersections<const SHAPE: usize>(bencher: Bencher, triangles: usize) {
         let (m, frames) = shape(SHAPES[SHAPE], triangles);
         let h = tailor(&m, &frames[1]);
         bencher.bench(|| h.self_intersections());
     }
 
-    #[divan::bench(args = sizes(), consts = [0, 1, 2])]
+    #[divan::bench(args = sizes(), consts = [0, 1, 2, 3])]
     fn tailor_self_impacts<const SHAPE: usize>(bencher: Bencher, triangles: usize) {
         let (m, frames) = shape(SHAPES[SHAPE], triangles);
         let mut h = tailor(&m, &frames[0]);
@@ -140,16 +141,21 @@ mod self_collision {
         bencher.bench(|| h.self_impacts());
     }
 
-    #[divan::bench(args = sizes(), consts = [0, 1, 2])]
+    /// Over the boxes at the end of the step, the ones the intersections pair.
+    #[divan::bench(args = sizes(), consts = [0, 1, 2, 3])]
     fn parry_bvh_self_traversal<const SHAPE: usize>(bencher: Bencher, triangles: usize) {
         let (m, frames) = shape(SHAPES[SHAPE], triangles);
-        let mesh = parry(&m, &frames[1]);
+        let bvh = parry_boxes(&m, &[&frames[1]], 0.0);
         let mut workspace = BvhWorkspace::default();
-        bencher.bench_local(|| {
-            let mut pairs = 0usize;
-            mesh.bvh()
-                .traverse_bvtt_single_tree::<false>(&mut workspace, &mut |_, _| pairs += 1);
-            pairs
-        });
+        bencher.bench_local(|| parry_pairs(&bvh, &mut workspace));
+    }
+
+    /// Over the boxes swept over the step, the ones the impacts pair.
+    #[divan::bench(args = sizes(), consts = [0, 1, 2, 3])]
+    fn parry_bvh_swept_self_traversal<const SHAPE: usize>(bencher: Bencher, triangles: usize) {
+        let (m, frames) = shape(SHAPES[SHAPE], triangles);
+        let bvh = parry_boxes(&m, &[&frames[0], &frames[1]], 0.0);
+        let mut workspace = BvhWorkspace::default();
+        bencher.bench_local(|| parry_pairs(&bvh, &mut workspace));
     }
 }

@@ -17,20 +17,25 @@
 //! with the collinear case (a vertex crossing an edge's end) one level further down. A zero-area
 //! triangle at the contact time is tested as its three edges.
 //!
-//! Most pairs the traversal hands over cannot touch, and two filters reject them before any
+//! Most pairs the traversal hands over cannot touch, and three filters reject them before any
 //! root is sought, each only where the exact test would reject too, so the answers are the
 //! same bits with or without them: the swept boxes of the two primitives are apart along an
 //! axis by more than the touching tolerance (Bridson et al. box every primitive over the step),
-//! or the cubic's Bernstein coefficients on `[0, 1]` all have one sign, so the four points
-//! never become coplanar (the coplanarity filter of Tang, Manocha & Tong, "Fast continuous
-//! collision detection using deforming non-penetration filters", I3D 2010).
+//! or the direction between their closest points at the start still separates them by that
+//! much at the end, hence throughout (neighbours on a smooth surface moving together, whose
+//! swept boxes overlap: a separating axis for linearly moving points), or the cubic's
+//! Bernstein coefficients on `[0, 1]` all have one sign, so the four points never become
+//! coplanar (the coplanarity filter of Tang, Manocha & Tong, "Fast continuous collision
+//! detection using deforming non-penetration filters", I3D 2010). A caller pairing many
+//! primitives boxes each once ([`swept`]) and applies the first filter to the boxes
+//! ([`apart_boxes`]) before the `_unboxed` tests, with the same bits as the tests here.
 //! Candidate times live on the stack and are tested in ascending order as the bisection finds
 //! them, so a pair that touches at its first root is not bisected further.
 
 use std::ops::ControlFlow;
 
 use parry3d_f64::math::Vector as DVec3;
-use parry3d_f64::query::PointQueryWithLocation;
+use parry3d_f64::query::{PointQuery, PointQueryWithLocation};
 use parry3d_f64::shape::Triangle;
 
 use crate::Point;
@@ -83,7 +88,20 @@ fn at(p: Path, t: f64) -> DVec3 {
 
 /// [`vertex_triangle_impact`] on glam vectors.
 pub(crate) fn vertex_triangle(p: Path, tri: [Path; 3]) -> Option<(f64, [f64; 3])> {
-    if apart(&[p, tri[0], tri[1], tri[2]], 1) {
+    if apart(&[tri[0], tri[1], tri[2], p], 3) {
+        return None;
+    }
+    vertex_triangle_unboxed(p, tri)
+}
+
+/// [`vertex_triangle`] past the box filter, for a caller that has applied it ([`apart_boxes`]).
+pub(crate) fn vertex_triangle_unboxed(p: Path, tri: [Path; 3]) -> Option<(f64, [f64; 3])> {
+    let paths = [tri[0], tri[1], tri[2], p];
+    let [a, b, c] = tri.map(|x| x[0]);
+    let nearest = Triangle::new(a, b, c)
+        .project_local_point(p[0], false)
+        .point;
+    if apart_along(&paths, 3, p[0] - nearest) {
         return None;
     }
     vertex_triangle_exact(p, tri)
@@ -116,6 +134,17 @@ pub(crate) fn edge_edge(e: [Path; 2], f: [Path; 2]) -> Option<(f64, [f64; 2])> {
     if apart(&[e[0], e[1], f[0], f[1]], 2) {
         return None;
     }
+    edge_edge_unboxed(e, f)
+}
+
+/// [`edge_edge`] past the box filter, for a caller that has applied it ([`apart_boxes`]).
+pub(crate) fn edge_edge_unboxed(e: [Path; 2], f: [Path; 2]) -> Option<(f64, [f64; 2])> {
+    let paths = [e[0], e[1], f[0], f[1]];
+    let (s, u, _) = segment_closest(e[0][0], e[1][0], f[0][0], f[1][0]);
+    let gap = (f[0][0] + (f[1][0] - f[0][0]) * u) - (e[0][0] + (e[1][0] - e[0][0]) * s);
+    if apart_along(&paths, 2, gap) {
+        return None;
+    }
     edge_edge_exact(e, f)
 }
 
@@ -141,26 +170,71 @@ fn edge_edge_exact(e: [Path; 2], f: [Path; 2]) -> Option<(f64, [f64; 2])> {
 /// Whether the swept boxes of the first `split` paths and of the rest are farther apart along
 /// some axis than any two points the exact tests would call touching: then no candidate time
 /// can pass them (a separating axis among the coordinate axes, per pair of primitives).
+fn apart<const N: usize>(paths: &[Path; N], split: usize) -> bool {
+    apart_boxes(swept(&paths[..split]), swept(&paths[split..]))
+}
+
+/// The box `[lo, hi]` swept by linearly moving points over the step: around their start and
+/// end positions.
+pub(crate) type Swept = [DVec3; 2];
+
+/// The [`Swept`] box of `paths`. Minima and maxima round nothing, so the box of a union is the
+/// union of the boxes, bit for bit: a caller may box each primitive once and pair the boxes.
+pub(crate) fn swept(paths: &[Path]) -> Swept {
+    let points = paths.iter().flatten();
+    let lo = points.clone().fold(DVec3::INFINITY, |m, &x| m.min(x));
+    let hi = points.fold(DVec3::NEG_INFINITY, |m, &x| m.max(x));
+    [lo, hi]
+}
+
+/// [`apart`] on the swept boxes of the two primitives.
+pub(crate) fn apart_boxes([alo, ahi]: Swept, [blo, bhi]: Swept) -> bool {
+    let gap = (blo - ahi).max(alo - bhi);
+    gap.max_element() > reach(alo.min(blo), ahi.max(bhi))
+}
+
+/// How far apart, along a unit axis, two primitives inside the box `lo..hi` must be for the
+/// exact tests never to call them touching.
 ///
 /// The tests accept points within [`TOUCH`] times [`size`] of each other, and [`size`] is at
 /// most the diagonal of the box around all the points, itself at most the sum of that box's
 /// extents. Computing a point at a time `t` and its distance to a triangle or a segment
 /// rounds by a few units in the last place of the largest coordinate involved; 64 of them are
-/// added, so the filter only ever rejects pairs that the exact tests reject.
-fn apart<const N: usize>(paths: &[Path; N], split: usize) -> bool {
-    let bound = |paths: &[Path]| {
-        let points = paths.iter().flatten();
-        let lo = points.clone().fold(DVec3::INFINITY, |m, &x| m.min(x));
-        let hi = points.fold(DVec3::NEG_INFINITY, |m, &x| m.max(x));
-        (lo, hi)
-    };
-    let ((alo, ahi), (blo, bhi)) = (bound(&paths[..split]), bound(&paths[split..]));
-    let (lo, hi) = (alo.min(blo), ahi.max(bhi));
+/// added, so the filters only ever reject pairs that the exact tests reject.
+fn reach(lo: DVec3, hi: DVec3) -> f64 {
     let extent = (hi - lo).element_sum();
     let magnitude = lo.abs().max(hi.abs()).max_element();
-    let slack = TOUCH * extent + 64.0 * f64::EPSILON * magnitude;
-    let gap = (blo - ahi).max(alo - bhi);
-    gap.max_element() > slack
+    TOUCH * extent + 64.0 * f64::EPSILON * magnitude
+}
+
+/// Whether `direction` separates the first `split` paths from the rest, by more than the
+/// exact tests' [`reach`], at the start and at the end of the step, hence at every time in
+/// between: the distance along it between two linearly moving points is linear in time.
+///
+/// Neighbours on a smooth surface moving together are separated this way by the direction
+/// between their closest points at the start, while their swept boxes overlap. The gap along
+/// a direction `d` is at most the distance times `|d|`, bounded by the sum of the magnitudes
+/// of its components; the dot products round by a few units in the last place of the largest
+/// coordinate times that sum, and 64 more of them are allowed.
+fn apart_along<const N: usize>(paths: &[Path; N], split: usize, direction: DVec3) -> bool {
+    let points = paths.iter().flatten();
+    let lo = points.clone().fold(DVec3::INFINITY, |m, &x| m.min(x));
+    let hi = points.fold(DVec3::NEG_INFINITY, |m, &x| m.max(x));
+    let magnitude = lo.abs().max(hi.abs()).max_element();
+    let scale = direction.abs().element_sum();
+    let needed = (reach(lo, hi) + 64.0 * f64::EPSILON * magnitude) * scale;
+    (0..2).all(|t| {
+        let along = |p: &Path| p[t].dot(direction);
+        let near = paths[..split]
+            .iter()
+            .map(along)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let far = paths[split..]
+            .iter()
+            .map(along)
+            .fold(f64::INFINITY, f64::min);
+        far - near > needed
+    })
 }
 
 /// The first root of `cubic` in `[0, 1]` (grazes included, see [`roots_in_unit`]) at which
@@ -686,6 +760,62 @@ mod tests {
             hits > 1000 && apart_count > 1000,
             "{hits} hits, {apart_count} apart"
         );
+    }
+
+    #[test]
+    fn closest_direction_filter_rejects_only_what_the_exact_tests_reject() {
+        // Primitives about the touching tolerance apart at the start (the second beyond the
+        // first one's closest point, along the direction away from it), carried together by
+        // one large translation with independent jitters of about the tolerance, so that
+        // their swept boxes overlap and only the direction between their closest points can
+        // part them: sometimes touching, sometimes apart, sometimes neither. Whenever that
+        // filter says apart, the exact tests find nothing; the filtered answers are the exact
+        // ones, bit for bit.
+        let mut rng = Rng(0x853c_49e6_748f_ea9b);
+        let (mut parted, mut hits) = (0, 0);
+        for i in 0..20_000i32 {
+            let offset = DVec3::splat(1000.0) * (i % 2) as f64;
+            let scale = 10f64.powi(i % 7 - 3);
+            let small = |rng: &mut Rng| scale * 10f64.powf(-9.5 + 1.5 * rng.signed());
+            let (gap, jitter) = (small(&mut rng), small(&mut rng));
+            let shift = rng.vector() * (3.0 * scale);
+            let carried = |rng: &mut Rng, p: DVec3| [p, p + shift + rng.vector() * jitter];
+            let [a, b, c] = [0; 3].map(|_| offset + rng.vector() * scale);
+            let x = offset + rng.vector() * (2.0 * scale);
+            let foot = Triangle::new(a, b, c).project_local_point(x, false).point;
+            let away = (x - foot).normalize_or_zero();
+            let tri = [a, b, c].map(|x| carried(&mut rng, x));
+            let p = carried(&mut rng, foot + away * gap);
+            let exact = vertex_triangle_exact(p, tri);
+            hits += usize::from(exact.is_some());
+            let paths = [tri[0], tri[1], tri[2], p];
+            if !apart(&paths, 3) && apart_along(&paths, 3, p[0] - foot) {
+                parted += 1;
+                assert_eq!(exact, None, "{p:?} {tri:?}");
+            }
+            assert_eq!(vertex_triangle(p, tri), exact);
+            let (e0, e1) = (offset + rng.vector() * scale, offset + rng.vector() * scale);
+            let (_, u, _) = segment_closest(x, x, e0, e1);
+            let foot = e0 + (e1 - e0) * u;
+            let away = (x - foot).normalize_or_zero();
+            let side = rng.vector();
+            let side = (side - away * side.dot(away)) * scale;
+            let middle = foot + away * gap;
+            let e = [carried(&mut rng, e0), carried(&mut rng, e1)];
+            let f = [
+                carried(&mut rng, middle - side),
+                carried(&mut rng, middle + side),
+            ];
+            let exact = edge_edge_exact(e, f);
+            hits += usize::from(exact.is_some());
+            let paths = [e[0], e[1], f[0], f[1]];
+            if !apart(&paths, 2) && apart_along(&paths, 2, middle - foot) {
+                parted += 1;
+                assert_eq!(exact, None, "{e:?} {f:?}");
+            }
+            assert_eq!(edge_edge(e, f), exact);
+        }
+        assert!(parted > 1000 && hits > 1000, "{hits} hits, {parted} parted");
     }
 
     #[test]

@@ -13,7 +13,7 @@
 
 use parry3d_f64::math::Vector as DVec3;
 
-use crate::ccd::{CONTACT_SLACK, edge_edge, vertex_triangle};
+use crate::ccd::{apart_boxes, edge_edge_unboxed, swept, vertex_triangle_unboxed};
 use crate::cones::NormalCones;
 use crate::hierarchy::Hierarchy;
 use crate::traverse::{cross_pairs, self_pairs};
@@ -107,14 +107,7 @@ impl Hierarchy {
             }
             edges_against_edges(self, f, self, g, true, out);
         };
-        out.refill(self_pairs(
-            self,
-            Some(&cones),
-            true,
-            CONTACT_SLACK,
-            0.0,
-            &visit,
-        ));
+        out.refill(self_pairs(self, Some(&cones), true, 0.0, &visit));
     }
 
     /// Every vertex–triangle and edge–edge contact between this mesh and `other` during the
@@ -133,7 +126,7 @@ impl Hierarchy {
             vertices_against_face(other, g, self, f, false, Found::TriangleVertex, out);
             edges_against_edges(self, f, other, g, false, out);
         };
-        out.refill(cross_pairs(self, other, CONTACT_SLACK, &visit));
+        out.refill(cross_pairs(self, other, &visit));
     }
 
     /// The vertices of this mesh touching triangles of `other` during the motions of their
@@ -153,12 +146,19 @@ impl Hierarchy {
             vertices_against_face(self, f, other, g, false, |i| i, out);
         };
         out.clear();
-        out.append(&mut cross_pairs(self, other, CONTACT_SLACK, &visit));
+        out.append(&mut cross_pairs(self, other, &visit));
         sort_vertex_triangle(out);
     }
 }
 
-/// The vertices owned by face `f` of `hv` against the triangles of face `g` of `ht`.
+/// The path of vertex `v` of `h` over the step: `[start, end]`.
+fn path(h: &Hierarchy, v: u32) -> [DVec3; 2] {
+    [h.start[v as usize], h.end()[v as usize]]
+}
+
+/// The vertices owned by face `f` of `hv` against the triangles of face `g` of `ht`. Each
+/// triangle is boxed once for all the vertices (see [`crate::ccd`]), and not at all when `f`
+/// owns none (a vertex belongs to the first of its faces).
 fn vertices_against_face<T>(
     hv: &Hierarchy,
     f: u32,
@@ -168,16 +168,23 @@ fn vertices_against_face<T>(
     wrap: fn(VertexTriangleImpact) -> T,
     out: &mut Vec<T>,
 ) {
-    let (vertex_end, triangle_end) = (hv.end(), ht.end());
-    for &v in hv.topology.owned_vertices(f) {
-        let path = [hv.start[v as usize], vertex_end[v as usize]];
-        for t in ht.topology.face_triangles(g) {
-            let corners = ht.topology.triangles[t];
+    let owned = hv.topology.owned_vertices(f);
+    if owned.is_empty() {
+        return;
+    }
+    for t in ht.topology.face_triangles(g) {
+        let corners = ht.topology.triangles[t];
+        let triangle = corners.map(|c| path(ht, c));
+        let around = swept(&triangle);
+        for &v in owned {
             if same_mesh && corners.contains(&v) {
                 continue;
             }
-            let triangle = corners.map(|c| [ht.start[c as usize], triangle_end[c as usize]]);
-            if let Some((time, barycentric)) = vertex_triangle(path, triangle) {
+            let p = path(hv, v);
+            if apart_boxes(swept(&[p]), around) {
+                continue;
+            }
+            if let Some((time, barycentric)) = vertex_triangle_unboxed(p, triangle) {
                 out.push(wrap(VertexTriangleImpact {
                     vertex: v,
                     triangle: t as u32,
@@ -190,7 +197,7 @@ fn vertices_against_face<T>(
 }
 
 /// The edges owned by face `f` of `ha` against those owned by face `g` of `hb`; within one
-/// face, each unordered pair once.
+/// face, each unordered pair once. Each edge of `f` is boxed once for all those of `g`.
 fn edges_against_edges(
     ha: &Hierarchy,
     f: u32,
@@ -200,34 +207,32 @@ fn edges_against_edges(
     out: &mut Vec<Found>,
 ) {
     let (mine, theirs) = (ha.topology.owned_edges(f), hb.topology.owned_edges(g));
-    let (ends_a, ends_b) = ((&ha.start[..], ha.end()), (&hb.start[..], hb.end()));
     for (i, &ea) in mine.iter().enumerate() {
         let theirs = if same_mesh && f == g {
             &theirs[i + 1..]
         } else {
             theirs
         };
+        let a = ha.topology.edges[ea as usize];
+        let path_a = a.map(|v| path(ha, v));
+        let box_a = swept(&path_a);
         for &eb in theirs {
-            let (a, b) = (
-                ha.topology.edges[ea as usize],
-                hb.topology.edges[eb as usize],
-            );
+            let b = hb.topology.edges[eb as usize];
             if same_mesh && a.iter().any(|v| b.contains(v)) {
+                continue;
+            }
+            let path_b = b.map(|v| path(hb, v));
+            if apart_boxes(box_a, swept(&path_b)) {
                 continue;
             }
             // Within one mesh the lower edge goes first, so the same pair always gives the
             // same bits whichever face owns which edge.
-            let (a, b, ends_a, ends_b) = if same_mesh && b < a {
-                (b, a, ends_b, ends_a)
+            let (edges, found) = if same_mesh && b < a {
+                ([b, a], edge_edge_unboxed(path_b, path_a))
             } else {
-                (a, b, ends_a, ends_b)
+                ([a, b], edge_edge_unboxed(path_a, path_b))
             };
-            let path =
-                |(start, end): (&[DVec3], &[DVec3]), v: u32| [start[v as usize], end[v as usize]];
-            if let Some((time, parameters)) =
-                edge_edge(a.map(|v| path(ends_a, v)), b.map(|v| path(ends_b, v)))
-            {
-                let edges = [a, b];
+            if let Some((time, parameters)) = found {
                 out.push(Found::EdgeEdge(EdgeEdgeImpact {
                     edges,
                     time,

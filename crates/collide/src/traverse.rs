@@ -3,37 +3,37 @@
 //! Magnenat-Thalmann (1994) do it: the pairs inside a node are those inside each child plus
 //! those across the two children, and a node the normal cones clear is skipped whole.
 //!
-//! Subtrees run in parallel (`rayon::join`) and their results are concatenated in a fixed
-//! order, so the output does not depend on the number of threads.
-
-use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::math::Vector as DVec3;
+//! The descent reads the boxes as the refit stored them, two to a record and in single
+//! precision, already loosened by the contact tolerance of the exact tests (see the
+//! hierarchy's refit), so a box test is six comparisons. Subtrees run in parallel
+//! (`rayon::join`) and their results are concatenated in a fixed order, so the output does
+//! not depend on the number of threads.
 
 use crate::cones::NormalCones;
 use crate::hierarchy::Hierarchy;
+use crate::hierarchy::boxes::{LEAF, SmallBox};
 
 /// Subtrees with fewer leaves than this are walked on one thread.
 const GRAIN: u32 = 1024;
 
-/// What to do with a pair of leaves (faces) whose boxes overlap: push results to the vector.
-pub(crate) type Visit<'a, T> = &'a (dyn Fn(u32, u32, &mut Vec<T>) + Sync);
-
 /// Visits every unordered pair of distinct leaves of `h` with overlapping boxes, each leaf with
 /// itself too when `same_leaf`, skipping nodes that `cones` clear. Boxes are compared loosened
-/// by `slack` and `pad` (see [`overlap`]).
-pub(crate) fn self_pairs<T: Send>(
+/// together by the distance `pad` (a proximity query's reach). `visit(f, g, out)` pushes the
+/// results of faces `f` and `g` to `out`.
+pub(crate) fn self_pairs<T: Send, V>(
     h: &Hierarchy,
     cones: Option<&NormalCones>,
     same_leaf: bool,
-    slack: f64,
     pad: f64,
-    visit: Visit<'_, T>,
-) -> Vec<T> {
+    visit: &V,
+) -> Vec<T>
+where
+    V: Fn(u32, u32, &mut Vec<T>) + Sync,
+{
     let mut out = Vec::new();
     let walk = Walk {
         ha: h,
         hb: h,
-        slack,
         pad,
         visit,
     };
@@ -42,41 +42,52 @@ pub(crate) fn self_pairs<T: Send>(
         cones,
         same_leaf,
     }
-    .node(h.root(), &mut out);
+    .node(root(h).0, &mut out);
     out
 }
 
-/// A node with its box.
-type Boxed = (u32, Aabb);
-
-/// Visits every pair (leaf of `a`, leaf of `b`) with overlapping boxes, loosened by `slack`.
-pub(crate) fn cross_pairs<T: Send>(
-    a: &Hierarchy,
-    b: &Hierarchy,
-    slack: f64,
-    visit: Visit<'_, T>,
-) -> Vec<T> {
+/// Visits every pair (leaf of `a`, leaf of `b`) with overlapping boxes.
+pub(crate) fn cross_pairs<T: Send, V>(a: &Hierarchy, b: &Hierarchy, visit: &V) -> Vec<T>
+where
+    V: Fn(u32, u32, &mut Vec<T>) + Sync,
+{
     let mut out = Vec::new();
     let walk = Walk {
         ha: a,
         hb: b,
-        slack,
         pad: 0.0,
         visit,
     };
-    let root = |h: &Hierarchy| (h.root(), h.node_box(h.root()));
     walk.cross(root(a), root(b), &mut out);
     out
 }
 
-/// Whether two boxes overlap once each is loosened by `slack` times the sum of its extents (at
-/// least its diagonal, without a square root: the contact tolerance of the exact tests is
-/// relative to the size of the features) and together by the distance `pad` (a proximity
-/// query's reach).
-fn overlap(a: &Aabb, b: &Aabb, slack: f64, pad: f64) -> bool {
-    let relative = slack * ((a.maxs - a.mins).element_sum() + (b.maxs - b.mins).element_sum());
-    let pad = DVec3::splat(relative + pad);
-    (a.mins - pad).cmple(b.maxs).all() && (b.mins - pad).cmple(a.maxs).all()
+/// A node as its parent's record refers to it (a record index, or `LEAF | face`), with its box.
+type Boxed = (u32, SmallBox);
+
+/// The root of `h` with its box.
+fn root(h: &Hierarchy) -> Boxed {
+    let boxes = h.boxes();
+    let root = if boxes.is_single_face() {
+        LEAF
+    } else {
+        h.root() - h.face_count() as u32
+    };
+    (root, boxes.root_box())
+}
+
+/// Whether two boxes come within `pad` of each other. With no pad the comparisons are in
+/// single precision, exact; a pad is added in double precision.
+#[inline(always)]
+fn overlap(a: &SmallBox, b: &SmallBox, pad: f64) -> bool {
+    if pad == 0.0 {
+        (0..3).all(|k| a[k] <= b[k + 3] && b[k] <= a[k + 3])
+    } else {
+        (0..3).all(|k| {
+            f64::from(a[k]) - pad <= f64::from(b[k + 3])
+                && f64::from(b[k]) - pad <= f64::from(a[k + 3])
+        })
+    }
 }
 
 fn collect<T>(f: impl FnOnce(&mut Vec<T>)) -> Vec<T> {
@@ -85,33 +96,54 @@ fn collect<T>(f: impl FnOnce(&mut Vec<T>)) -> Vec<T> {
     out
 }
 
-struct Walk<'a, T> {
+struct Walk<'a, V> {
     ha: &'a Hierarchy,
     hb: &'a Hierarchy,
-    slack: f64,
     pad: f64,
-    visit: Visit<'a, T>,
+    visit: &'a V,
 }
 
-impl<T: Send> Walk<'_, T> {
+/// The number of faces below a node reference of `h`.
+#[inline(always)]
+fn size(h: &Hierarchy, node: u32) -> u32 {
+    if node & LEAF != 0 {
+        1
+    } else {
+        h.leaf_counts[h.face_count() + node as usize]
+    }
+}
+
+/// The children of a record reference of `h`, with their boxes, or `None` for a leaf.
+#[inline(always)]
+fn children(h: &Hierarchy, node: u32) -> Option<[Boxed; 2]> {
+    (node & LEAF == 0).then(|| {
+        let (child, boxes) = h.boxes().record(node);
+        [(child[0], boxes[0]), (child[1], boxes[1])]
+    })
+}
+
+impl<V: Sync> Walk<'_, V> {
     /// Visits the overlapping leaf pairs below node `a` of `ha` and node `b` of `hb`. The
     /// boxes travel with the nodes: a child's box is read from its parent's record.
-    fn cross(&self, a: Boxed, b: Boxed, out: &mut Vec<T>) {
+    fn cross<T: Send>(&self, a: Boxed, b: Boxed, out: &mut Vec<T>)
+    where
+        V: Fn(u32, u32, &mut Vec<T>),
+    {
         let (ha, hb) = (self.ha, self.hb);
-        if !overlap(&a.1, &b.1, self.slack, self.pad) {
+        if !overlap(&a.1, &b.1, self.pad) {
             return;
         }
-        let (size_a, size_b) = (ha.leaf_counts[a.0 as usize], hb.leaf_counts[b.0 as usize]);
+        let (size_a, size_b) = (size(ha, a.0), size(hb, b.0));
         // Split the larger side, `a` on ties. A leaf covers one face and an internal node at
         // least two, so when the larger side is a leaf both are.
         let (x, y) = if size_a >= size_b
-            && let Some([a0, a1]) = ha.children_boxed(a.0)
+            && let Some([a0, a1]) = children(ha, a.0)
         {
             ((a0, b), (a1, b))
-        } else if let Some([b0, b1]) = hb.children_boxed(b.0) {
+        } else if let Some([b0, b1]) = children(hb, b.0) {
             ((a, b0), (a, b1))
         } else {
-            return (self.visit)(a.0, b.0, out);
+            return (self.visit)(a.0 & !LEAF, b.0 & !LEAF, out);
         };
         if size_a.min(size_b) >= GRAIN / 4 && size_a.max(size_b) >= GRAIN {
             let (mut first, mut second) = rayon::join(
@@ -127,25 +159,34 @@ impl<T: Send> Walk<'_, T> {
     }
 }
 
-struct SelfWalk<'a, T> {
-    walk: Walk<'a, T>,
+struct SelfWalk<'a, V> {
+    walk: Walk<'a, V>,
     cones: Option<&'a NormalCones>,
     same_leaf: bool,
 }
 
-impl<T: Send> SelfWalk<'_, T> {
-    fn node(&self, node: u32, out: &mut Vec<T>) {
+impl<V: Sync> SelfWalk<'_, V> {
+    /// The pairs within the node that the reference `node` names.
+    fn node<T: Send>(&self, node: u32, out: &mut Vec<T>)
+    where
+        V: Fn(u32, u32, &mut Vec<T>),
+    {
         let h = self.walk.ha;
-        if self.cones.is_some_and(|c| c.cannot_self_collide(h, node)) {
+        let id = if node & LEAF != 0 {
+            node & !LEAF
+        } else {
+            h.face_count() as u32 + node
+        };
+        if self.cones.is_some_and(|c| c.cannot_self_collide(h, id)) {
             return;
         }
-        let Some([a, b]) = h.children_boxed(node) else {
+        let Some([a, b]) = children(h, node) else {
             if self.same_leaf {
-                (self.walk.visit)(node, node, out);
+                (self.walk.visit)(id, id, out);
             }
             return;
         };
-        if h.leaf_counts[node as usize] < GRAIN {
+        if size(h, node) < GRAIN {
             self.node(a.0, out);
             self.node(b.0, out);
             self.walk.cross(a, b, out);

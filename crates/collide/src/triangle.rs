@@ -7,6 +7,15 @@
 //! plane and tested with 2D orientations. The orientations come from Shewchuk's adaptive exact
 //! predicates (`robust`), so coplanar and touching configurations, which flat cloth produces all
 //! the time, are decided exactly. Touching counts as intersecting.
+//!
+//! Neighbouring triangles of a smooth surface are nearly coplanar, so the orientations of one
+//! against the other's plane fall back to exact arithmetic, the slow path of the adaptive
+//! predicates, although the triangles lie side by side. Two filters reject such pairs first,
+//! each only when the triangles are strictly apart, so the answers are the same with or
+//! without them: their boxes are disjoint, or a plane through an edge of one (and a point
+//! off the triangle along its normal) has that triangle strictly on one side and the other
+//! triangle strictly on the other. Any point off the edge's line makes such a plane, so its
+//! rounding does not matter, and its orientations are well away from zero, the fast path.
 
 use parry3d_f64::math::Vector as DVec3;
 use robust::{Coord, Coord3D, orient2d, orient3d};
@@ -35,6 +44,33 @@ pub fn triangles_intersect(p: [Point; 3], q: [Point; 3]) -> bool {
 
 /// [`triangles_intersect`] on glam vectors.
 pub(crate) fn triangles_meet(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
+    if boxes_apart(p, q) || edge_plane_separates(p, q) || edge_plane_separates(q, p) {
+        return false;
+    }
+    triangles_meet_exact(p, q)
+}
+
+/// Whether the boxes of two triangles are disjoint (touching boxes are not).
+fn boxes_apart(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
+    let lo = |t: [DVec3; 3]| t[0].min(t[1]).min(t[2]);
+    let hi = |t: [DVec3; 3]| t[0].max(t[1]).max(t[2]);
+    hi(p).cmplt(lo(q)).any() || hi(q).cmplt(lo(p)).any()
+}
+
+/// Whether a plane through an edge of `p` and a point off `p` along its normal has the third
+/// corner of `p` strictly on one side and all of `q` strictly on the other.
+fn edge_plane_separates(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
+    let normal = (p[1] - p[0]).cross(p[2] - p[0]);
+    (0..3).any(|i| {
+        let (a, b, c) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
+        let plane = [a, b, a + normal];
+        let side = orient(plane, c);
+        side != 0.0 && q.iter().all(|&x| orient(plane, x) == -side)
+    })
+}
+
+/// [`triangles_meet`] without the filters.
+fn triangles_meet_exact(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
     if is_degenerate(p) || is_degenerate(q) {
         return false;
     }
@@ -246,6 +282,34 @@ mod tests {
         assert!(is_degenerate(sliver));
         assert!(!triangles_meet(floor(), sliver));
         assert!(!is_degenerate(floor()));
+    }
+
+    /// Random pairs of small triangles near one plane, side by side, overlapping or touching
+    /// (corners on a coarse grid, so that shared vertices, edges and coplanar contacts come
+    /// often): the filters never change the answer, and they do reject.
+    #[test]
+    fn filters_keep_the_exact_answer() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = |k: u64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % k) as f64
+        };
+        let (mut rejected, mut meeting) = (0, 0);
+        for _ in 0..20_000 {
+            let mut corner = || DVec3::new(next(5), next(5), next(3) * 0.5) * 0.25;
+            let (p, q) = (
+                [corner(), corner(), corner()],
+                [corner(), corner(), corner()],
+            );
+            let exact = triangles_meet_exact(p, q);
+            assert_eq!(triangles_meet(p, q), exact, "{p:?} {q:?}");
+            meeting += usize::from(exact);
+            let filtered = boxes_apart(p, q) || edge_plane_separates(p, q);
+            rejected += usize::from(filtered && !is_degenerate(p) && !is_degenerate(q));
+        }
+        assert!(rejected > 1000 && meeting > 1000, "{rejected} {meeting}");
     }
 
     #[test]

@@ -1,6 +1,8 @@
 //! The deforming meshes both benchmarks run on, built the same way for tailor and parry.
 
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::math::Vector as DVec3;
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 use parry3d_f64::shape::{TriMesh, TriMeshFlags};
 use tailor_collide::{Hierarchy, Point};
 
@@ -53,15 +55,55 @@ pub fn rolled_sheet(triangles: usize) -> (Mesh, [Vec<Point>; 2]) {
     (m, frames)
 }
 
+/// A sheet of quads (left as quads, as a Catmull-Clark refined cloth surface is) of about
+/// `triangles` fan triangles, draped in folds: folded back over itself round a hinge, 4 cm
+/// between the layers, and both layers wrinkled by ripples of three wavelengths and
+/// directions (slopes up to about 40°). Over the step the ripples drift and the fold closes
+/// by 5% (vertices move up to about 2 mm). The normal cones clear only patches a few ripples
+/// wide, and the exact tests run along the seams between them, as on a draped garment.
+pub fn folded_drape(triangles: usize) -> (Mesh, [Vec<Point>; 2]) {
+    let n = ((triangles / 2) as f64).sqrt().round() as u32;
+    let m = sheet(n, |_, _| 0.0);
+    // Wave vectors (rad/m), amplitudes (m) and phases of the ripples.
+    let ripples = [
+        (125.0, 30.0, 0.003, 0.0),
+        (-40.0, 75.0, 0.003, 1.0),
+        (25.0, -45.0, 0.003, 2.0),
+    ];
+    let drape = |gap: f64, drift: f64| {
+        m.mapped(move |p| {
+            let w: f64 = ripples
+                .iter()
+                .map(|&(kx, ky, a, phase)| a * (kx * p.x + ky * p.y + phase + drift).sin())
+                .sum();
+            // Lower layer up to the hinge, a half circle of diameter `gap`, the upper layer
+            // back over the lower; the ripples displace each layer along its normal.
+            let (r, hinge) = (gap / 2.0, 0.45);
+            let arc = std::f64::consts::PI * r;
+            if p.x <= hinge {
+                Point::new(p.x, p.y, w)
+            } else if p.x <= hinge + arc {
+                let (s, c) = ((p.x - hinge) / r).sin_cos();
+                Point::new(hinge + (r - w) * s, p.y, r - (r - w) * c)
+            } else {
+                Point::new(hinge - (p.x - hinge - arc), p.y, gap - w)
+            }
+        })
+    };
+    let frames = [drape(0.04, 0.0), drape(0.038, 0.3)];
+    (m, frames)
+}
+
 /// The deforming meshes benchmarked.
-pub const SHAPES: [&str; 3] = ["sheet", "tube", "rolled"];
+pub const SHAPES: [&str; 4] = ["sheet", "tube", "rolled", "folded"];
 
 /// The mesh and frames of shape `name` at about `triangles` triangles.
 pub fn shape(name: &str, triangles: usize) -> (Mesh, [Vec<Point>; 2]) {
     match name {
         "sheet" => waving_sheet(triangles),
         "tube" => bending_tube(triangles),
-        _ => rolled_sheet(triangles),
+        "rolled" => rolled_sheet(triangles),
+        _ => folded_drape(triangles),
     }
 }
 
@@ -75,12 +117,33 @@ pub fn tailor(m: &Mesh, positions: &[Point]) -> Hierarchy {
     Hierarchy::build(positions, &m.offsets, &m.corners).unwrap()
 }
 
-/// Parry's deformable `TriMesh` of `m` (already triangulated) at `positions`.
+/// Parry's deformable `TriMesh` of the fan triangles of `m` at `positions`.
 pub fn parry(m: &Mesh, positions: &[Point]) -> TriMesh {
-    let indices = m
-        .corners
-        .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]])
-        .collect();
+    let indices = m.triangles().into_iter().map(|(t, _)| t).collect();
     TriMesh::with_flags(glam(positions), indices, TriMeshFlags::DEFORMABLE).unwrap()
+}
+
+/// Parry's `Bvh` (binned build) over the boxes of the fan triangles of `m` around their corners in every one of `frames`, each loosened by `pad`: the boxes that a
+/// self-query over that motion, within a distance of `2 pad`, must pair up. The swept boxes of
+/// a step for continuous impacts, the end positions for intersections, and those loosened by
+/// half the thickness for proximity, as tailor's traversal compares them.
+pub fn parry_boxes(m: &Mesh, frames: &[&[Point]], pad: f64) -> Bvh {
+    let frames: Vec<Vec<DVec3>> = frames.iter().map(|f| glam(f)).collect();
+    let leaves: Vec<Aabb> = m
+        .triangles()
+        .into_iter()
+        .map(|(t, _)| {
+            let corners = frames.iter().flat_map(|f| t.iter().map(|&v| f[v as usize]));
+            Aabb::from_points(corners).loosened(pad)
+        })
+        .collect();
+    Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves)
+}
+
+/// The number of pairs of leaves of `bvh` whose boxes overlap: parry's sequential
+/// self-traversal, with no test on the pairs.
+pub fn parry_pairs(bvh: &Bvh, workspace: &mut BvhWorkspace) -> usize {
+    let mut pairs = 0usize;
+    bvh.traverse_bvtt_single_tree::<false>(workspace, &mut |_, _| pairs += 1);
+    pairs
 }

@@ -21,14 +21,13 @@
 //! sibling subtree whose box is within the bound: one box test per level where a descent from
 //! the root needs two, and the faces near the seed come first.
 
-use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Vector as DVec3;
 use rayon::prelude::*;
 
 use crate::memory::heap;
 
 /// Marks a child reference as a leaf: the rest of the bits are the face.
-const LEAF: u32 = 1 << 31;
+pub(crate) const LEAF: u32 = 1 << 31;
 
 /// No record: the parent of the root.
 const NONE: u32 = u32::MAX;
@@ -40,7 +39,7 @@ const REFIT_RUN: usize = 1024;
 const PARALLEL_LEVEL: usize = 16 * REFIT_RUN;
 
 /// A box as `[min x, min y, min z, max x, max y, max z]`, rounded outward to `f32`.
-type SmallBox = [f32; 6];
+pub(crate) type SmallBox = [f32; 6];
 
 /// The empty box, the identity of [`union`].
 const EMPTY: SmallBox = [
@@ -82,6 +81,8 @@ pub(crate) struct Fit<'a> {
     /// The end positions of a swept refit.
     pub(crate) end: Option<&'a [DVec3]>,
     pub(crate) margin: f64,
+    /// Each face's box is loosened by this fraction of the sum of its extents.
+    pub(crate) relative: f64,
 }
 
 /// A node still to visit: a record, with the squared distance from the query to its box.
@@ -155,9 +156,12 @@ impl Boxes {
         let face_box = |f: usize| {
             let corners =
                 &fit.face_vertices[fit.face_offsets[f] as usize..fit.face_offsets[f + 1] as usize];
-            corners
+            let b = corners
                 .iter()
-                .fold(EMPTY, |b, &v| union(&b, &vertices[v as usize]))
+                .fold(EMPTY, |b, &v| union(&b, &vertices[v as usize]));
+            let (lo, hi) = widen(&b);
+            let pad = DVec3::splat(fit.relative * (hi - lo).element_sum());
+            outward(lo - pad, hi + pad)
         };
         let child_box = |c: u32, done: &[Record]| {
             if c & LEAF != 0 {
@@ -201,7 +205,13 @@ impl Boxes {
     }
 
     /// The box of `node` of a tree over `faces` faces whose root is `root`.
-    pub(crate) fn node_box(&self, node: u32, faces: u32, root: u32) -> Aabb {
+    #[cfg(test)]
+    pub(crate) fn node_box(
+        &self,
+        node: u32,
+        faces: u32,
+        root: u32,
+    ) -> parry3d_f64::bounding_volume::Aabb {
         let b = if node == root {
             self.root
         } else if node < faces {
@@ -212,16 +222,24 @@ impl Boxes {
             union(a, b)
         };
         let (lo, hi) = widen(&b);
-        Aabb::new(lo, hi)
+        parry3d_f64::bounding_volume::Aabb::new(lo, hi)
     }
 
-    /// The boxes of the two children of internal node `F + record`, in the order of its
-    /// children: read from its record, with no union to form.
-    pub(crate) fn child_boxes(&self, record: u32) -> [Aabb; 2] {
-        self.records[record as usize].boxes.map(|b| {
-            let (lo, hi) = widen(&b);
-            Aabb::new(lo, hi)
-        })
+    /// The root's box.
+    pub(crate) fn root_box(&self) -> SmallBox {
+        self.root
+    }
+
+    /// The references and boxes of the two children of record `r`: a child's record index,
+    /// or `LEAF | face`.
+    pub(crate) fn record(&self, r: u32) -> ([u32; 2], &[SmallBox; 2]) {
+        let record = &self.records[r as usize];
+        (record.child, &record.boxes)
+    }
+
+    /// Whether there are no records (a one-face mesh).
+    pub(crate) fn is_single_face(&self) -> bool {
+        self.records.is_empty()
     }
 
     /// Heap bytes held.

@@ -8,11 +8,10 @@
 //! depth-first numbering of the faces makes the faces below any node one contiguous slice.
 //! [`build`] makes the tree, [`refit`] the boxes.
 
-mod boxes;
+pub(crate) mod boxes;
 mod build;
 mod refit;
 
-use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Vector as DVec3;
 use rayon::prelude::*;
 
@@ -202,17 +201,16 @@ impl Hierarchy {
         self.boxes.visit_near(q, bound, seed, stack, leaf);
     }
 
-    /// The box of `node` at the last refit.
-    pub(crate) fn node_box(&self, node: u32) -> Aabb {
-        self.boxes
-            .node_box(node, self.face_count() as u32, self.root())
+    /// The boxes at the last refit.
+    pub(crate) fn boxes(&self) -> &Boxes {
+        &self.boxes
     }
 
-    /// The children of `node` with their boxes at the last refit, or `None` for a leaf.
-    pub(crate) fn children_boxed(&self, node: u32) -> Option<[(u32, Aabb); 2]> {
-        let [a, b] = self.node_children(node)?;
-        let [box_a, box_b] = self.boxes.child_boxes(node - self.face_count() as u32);
-        Some([(a, box_a), (b, box_b)])
+    /// The box of `node` at the last refit.
+    #[cfg(test)]
+    pub(crate) fn node_box(&self, node: u32) -> parry3d_f64::bounding_volume::Aabb {
+        self.boxes
+            .node_box(node, self.face_count() as u32, self.root())
     }
 
     /// The faces below `node`.
@@ -228,6 +226,7 @@ impl Hierarchy {
     }
 
     /// The children of `node`, or `None` for a leaf.
+    #[cfg(test)]
     pub(crate) fn node_children(&self, node: u32) -> Option<[u32; 2]> {
         let f = self.face_count() as u32;
         (node >= f).then(|| self.children[(node - f) as usize])
