@@ -45,11 +45,12 @@ struct Shape {
 }
 
 impl Shape {
-    /// The union of two superfaces whose boundaries share `seam` edges.
+    /// The union of two superfaces whose boundaries share `seam` edges. An edge of three or
+    /// more faces, or a face repeated, is a seam of several pairs: the count stops at zero.
     fn merged(self, other: Self, seam: u32) -> Self {
         Self {
             faces: self.faces + other.faces,
-            sides: self.sides + other.sides - 2 * seam,
+            sides: (self.sides + other.sides).saturating_sub(2 * seam),
         }
     }
 
@@ -164,7 +165,8 @@ pub(super) fn coarsen(topology: &Topology, positions: &[DVec3]) -> Tree {
         for ([a, b], seam) in edges {
             let (a, b) = (next[a as usize], next[b as usize]);
             if a == b {
-                next_shapes[a as usize].sides -= 2 * seam;
+                let sides = &mut next_shapes[a as usize].sides;
+                *sides = sides.saturating_sub(2 * seam);
             } else {
                 seams.push(([a.min(b), a.max(b)], seam));
             }
@@ -360,6 +362,21 @@ mod tests {
             Hierarchy::build(&rolled, &o, &c).unwrap().children,
             h.children
         );
+    }
+
+    #[test]
+    fn repeated_faces_and_shared_edges_build() {
+        // The same quad three times, and three triangles on one edge: every pair is a seam of
+        // all the shared edges, more than the superface has.
+        let p: Vec<Point> = [[0., 0.], [1., 0.], [1., 1.], [0., 1.], [0.5, -1.]]
+            .iter()
+            .map(|&[x, y]| Point::new(x, y, 0.0))
+            .collect();
+        let c = [
+            0, 1, 2, 3, 0, 1, 2, 3, 3, 2, 1, 0, 0, 1, 4, 1, 0, 2, 0, 1, 3,
+        ];
+        let h = Hierarchy::build(&p, &[0, 4, 8, 12, 15, 18, 21], &c).unwrap();
+        assert_eq!(h.leaf_counts[h.root() as usize], 6);
     }
 
     #[test]
