@@ -29,7 +29,10 @@
 //! to be positive, and the total turn, which can only change by whole turns and cannot change
 //! while every edge turns forward, is checked at the start. A static refit has one coefficient.
 //!
-//! The boundary chains are topological (built once, see the hierarchy's build).
+//! The boundary chains are topological (built once, see the hierarchy's build). Being star-shaped
+//! around the centroid is a sufficient condition only, so the test clears what the coarsening
+//! makes round: an S of four quads fails it even flat, a 2 × 2 square passes while its normals
+//! do, and the build matches superfaces by roundness for that reason.
 
 use std::f64::consts::{PI, TAU};
 

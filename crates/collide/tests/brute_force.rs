@@ -5,7 +5,9 @@
 
 mod common;
 
-use common::{Mesh, Rng, collapsed, folded_sheet, ngon_sheet, sheet, soup, sphere, torus, wave};
+use common::{
+    Coil, Fold, Mesh, Rng, collapsed, folded_sheet, ngon_sheet, sheet, soup, sphere, torus, wave,
+};
 use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::Triangle;
@@ -392,6 +394,55 @@ fn self_impacts_match_brute_force() {
         assert_same(&got.1, &want.1, name);
     }
     assert!(found_any, "some case must have both kinds of impact");
+}
+
+/// Random folds of a quad sheet, nearly closed and closing further over the step, and random
+/// coils (a ramp winding over itself, all its normals within a cone, pressed flatter over the
+/// step), rippled about as high as the gap between their layers so that these pass through
+/// each other in places: the normal cones clear the flat and gently curved patches the
+/// coarsening makes, never a patch that touches itself, so the continuous and static
+/// self-collision queries find exactly what brute force finds.
+#[test]
+fn random_folds_and_coils_match_brute_force() {
+    let mut rng = Rng::new(17);
+    let flat = common::sheet(12, |_, _| 0.0);
+    let (mut impacts, mut crossings) = ([0; 2], [0; 2]);
+    for case in 0..16 {
+        let (name, start, end) = if case % 2 == 0 {
+            let fold = Fold::random(&mut rng);
+            let later = fold.later(0.1 + 0.3 * rng.unit(), 0.5 * rng.unit());
+            let name = format!("case {case}: {fold:?}");
+            (
+                name,
+                flat.mapped(|p| fold.apply(p)),
+                flat.mapped(|p| later.apply(p)),
+            )
+        } else {
+            let coil = Coil::random(&mut rng);
+            let later = coil.later(0.5 + 0.4 * rng.unit(), 0.5 * rng.unit());
+            let name = format!("case {case}: {coil:?}");
+            (
+                name,
+                flat.mapped(|p| coil.apply(p)),
+                flat.mapped(|p| later.apply(p)),
+            )
+        };
+        let mut h = build(&flat);
+        h.refit_swept(&start, &end, 0.0).unwrap();
+        let want = brute_self_impacts(&flat, &start, &end);
+        impacts[case % 2] += want.0.len() + want.1.len();
+        let got = self_impact_keys(&h);
+        assert_same(&got.0, &want.0, &name);
+        assert_same(&got.1, &want.1, &name);
+        h.refit(&end, 0.0).unwrap();
+        let want = brute_self_intersections(&flat, &end);
+        crossings[case % 2] += want.len();
+        assert_eq!(h.self_intersections(), want, "{name}");
+    }
+    assert!(
+        impacts.iter().chain(&crossings).all(|&n| n > 0),
+        "folds and coils must touch themselves: impacts {impacts:?}, crossings {crossings:?}"
+    );
 }
 
 #[test]

@@ -1,13 +1,23 @@
 //! Building the coarsening hierarchy (DeRose, Kass & Truong 1998, §5.1).
 //!
 //! Level 0 is the faces. At each level the adjacency graph of the current superfaces is matched
-//! greedily, cheapest pair first, where a pair costs the half-area of its merged bounding box at
-//! the build positions: compact pairs merge first, long slivers last. Every matched pair becomes a
-//! parent superface; an unmatched superface waits for the next level. Superfaces with no
-//! neighbour left (the last of a disconnected piece), and every unmatched one when a level merged
-//! fewer than two thirds of the superfaces, are paired with their neighbour in Morton order
-//! instead, so pieces join and the tree stays balanced: the count shrinks by at least a third per
-//! level, giving depth O(log n). Each level sorts its edges once, so the build is O(n log n).
+//! greedily, cheapest pair first, where a pair costs the isoperimetric ratio of the superface it
+//! would make counted in the mesh's own units, `(boundary edges)² / faces` (16 for a square of
+//! four quads, 18 for a domino, 25 for four quads in a row, an L or an S; 16 again for a 4 × 4
+//! and 25 for a 2 × 8): round superfaces merge first, slivers and crooked shapes last. Equal
+//! costs are exactly equal, so ties go to the pair first in mesh order, and a grid's dominoes
+//! all lie the same way and pair into squares; the children of a subdivided face, numbered
+//! together, become one square. Roundness is what the normal cones need ([`crate::cones`]): a
+//! round patch of a smooth surface has the narrowest spread of normals for its area and a
+//! star-shaped contour, where an S of four quads is not star-shaped even flat. Counting edges
+//! rather than measuring lengths keeps the tree the same whatever pose it is built at, and
+//! free of the rounding noise that breaks ties at random (a bounding box would find a strip
+//! along a fold as compact as a square across it). Every matched pair becomes a parent
+//! superface; an unmatched superface waits for the next level. Superfaces with no neighbour
+//! left (the last of a disconnected piece), and every unmatched one when a level merged fewer
+//! than two thirds of the superfaces, are paired with their neighbour in Morton order instead,
+//! so pieces join and the tree stays balanced: the count shrinks by at least a third per level,
+//! giving depth O(log n). Each level sorts its edges once, so the build is O(n log n).
 //!
 //! The boundary chain of a node is the boundary of the 2-chain of its oriented faces: its polygon
 //! edges, directed as the faces wind, with opposite edges cancelled. The normal-cone test
@@ -26,7 +36,43 @@ pub(super) struct Tree {
     pub(super) level_offsets: Vec<u32>,
 }
 
-/// Coarsens the faces of `topology` into a binary tree, preferring compact pairs at `positions`.
+/// A superface's size in the mesh's own units: its faces, and the polygon edges of its
+/// boundary.
+#[derive(Clone, Copy)]
+struct Shape {
+    faces: u32,
+    sides: u32,
+}
+
+impl Shape {
+    /// The union of two superfaces whose boundaries share `seam` edges. An edge of three or
+    /// more faces, or a face repeated, is a seam of several pairs: the count stops at zero.
+    fn merged(self, other: Self, seam: u32) -> Self {
+        Self {
+            faces: self.faces + other.faces,
+            sides: (self.sides + other.sides).saturating_sub(2 * seam),
+        }
+    }
+
+    /// The isoperimetric ratio `sides² / faces`, the same for the same counts to the bit.
+    fn roundness_cost(self) -> f64 {
+        f64::from(self.sides).powi(2) / f64::from(self.faces)
+    }
+}
+
+/// The number of polygon edges faces `f` and `g` share.
+fn seam(topology: &Topology, f: u32, g: u32) -> u32 {
+    fn sides(c: &[u32]) -> impl Iterator<Item = [u32; 2]> + '_ {
+        (0..c.len()).map(move |i| [c[i], c[(i + 1) % c.len()]])
+    }
+    let other = topology.face(g);
+    sides(topology.face(f))
+        .filter(|&[p, q]| sides(other).any(|e| e == [q, p] || e == [p, q]))
+        .count() as u32
+}
+
+/// Coarsens the faces of `topology` into a binary tree of round superfaces; `positions` order
+/// the pieces that have no neighbour left.
 pub(super) fn coarsen(topology: &Topology, positions: &[DVec3]) -> Tree {
     let faces = topology.face_count();
     let mut node: Vec<u32> = (0..faces as u32).collect();
@@ -34,19 +80,30 @@ pub(super) fn coarsen(topology: &Topology, positions: &[DVec3]) -> Tree {
         .map(|f| Aabb::from_points(topology.face(f).iter().map(|&v| positions[v as usize])))
         .collect();
     let whole = boxes.iter().skip(1).fold(boxes[0], |a, b| a.merged(b));
-    let mut edges = topology.adjacency.clone();
+    let mut shapes: Vec<Shape> = (0..faces as u32)
+        .map(|f| Shape {
+            faces: 1,
+            sides: topology.face(f).len() as u32,
+        })
+        .collect();
+    // The adjacency graph, each edge with the number of polygon edges its superfaces share.
+    let mut edges: Vec<([u32; 2], u32)> = topology
+        .adjacency
+        .par_iter()
+        .map(|&[f, g]| ([f, g], seam(topology, f, g)))
+        .collect();
     let mut children = Vec::with_capacity(faces.saturating_sub(1));
     let mut level_offsets = vec![0u32];
 
     while node.len() > 1 {
         let count = node.len();
-        // Phase 1: greedy matching on the adjacency graph, compact pairs first.
-        // A half-area is a non-negative float, whose bits sort as its value does.
+        // Phase 1: greedy matching on the adjacency graph, round pairs first.
+        // A ratio is a non-negative float, whose bits sort as its value does.
         let mut order: Vec<(u64, [u32; 2])> = edges
             .par_iter()
-            .map(|&[a, b]| {
-                let cost = boxes[a as usize].merged(&boxes[b as usize]).half_area();
-                (cost.to_bits(), [a, b])
+            .map(|&([a, b], seam)| {
+                let merged = shapes[a as usize].merged(shapes[b as usize], seam);
+                (merged.roundness_cost().to_bits(), [a, b])
             })
             .collect();
         order.par_sort_unstable();
@@ -62,7 +119,7 @@ pub(super) fn coarsen(topology: &Topology, positions: &[DVec3]) -> Tree {
 
         // Phase 2: pair the stranded superfaces by Morton order of their centres.
         let mut degree = vec![0u32; count];
-        for &[a, b] in &edges {
+        for &([a, b], _) in &edges {
             degree[a as usize] += 1;
             degree[b as usize] += 1;
         }
@@ -85,31 +142,43 @@ pub(super) fn coarsen(topology: &Topology, positions: &[DVec3]) -> Tree {
         let mut next = vec![0u32; count];
         let mut next_node = Vec::with_capacity(count - pairs.len());
         let mut next_boxes = Vec::with_capacity(count - pairs.len());
+        let mut next_shapes = Vec::with_capacity(count - pairs.len());
         for &[a, b] in &pairs {
             next[a as usize] = next_node.len() as u32;
             next[b as usize] = next_node.len() as u32;
             next_node.push((faces + children.len()) as u32);
             next_boxes.push(boxes[a as usize].merged(&boxes[b as usize]));
+            next_shapes.push(shapes[a as usize].merged(shapes[b as usize], 0));
             children.push([node[a as usize], node[b as usize]]);
         }
         for c in (0..count).filter(|&c| !matched[c]) {
             next[c] = next_node.len() as u32;
             next_node.push(node[c]);
             next_boxes.push(boxes[c]);
+            next_shapes.push(shapes[c]);
         }
         level_offsets.push(children.len() as u32);
 
-        // Phase 4: the adjacency between the new superfaces.
-        edges = edges
-            .iter()
-            .map(|&[a, b]| (next[a as usize], next[b as usize]))
-            .filter(|(a, b)| a != b)
-            .map(|(a, b)| [a.min(b), a.max(b)])
+        // Phase 4: the adjacency between the new superfaces, the seam between the children
+        // of a pair taken off its boundary, and the seams between two superfaces summed.
+        let mut seams = Vec::with_capacity(edges.len());
+        for ([a, b], seam) in edges {
+            let (a, b) = (next[a as usize], next[b as usize]);
+            if a == b {
+                let sides = &mut next_shapes[a as usize].sides;
+                *sides = sides.saturating_sub(2 * seam);
+            } else {
+                seams.push(([a.min(b), a.max(b)], seam));
+            }
+        }
+        seams.par_sort_unstable();
+        edges = seams
+            .chunk_by(|x, y| x.0 == y.0)
+            .map(|group| (group[0].0, group.iter().map(|&(_, s)| s).sum()))
             .collect();
-        edges.par_sort_unstable();
-        edges.dedup();
         node = next_node;
         boxes = next_boxes;
+        shapes = next_shapes;
     }
     Tree {
         children,
@@ -265,6 +334,49 @@ mod tests {
         let c = [0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2];
         let h = Hierarchy::build(&p, &[0, 3, 6, 9, 12], &c).unwrap();
         assert!(h.node_boundary(h.root()).is_empty());
+    }
+
+    #[test]
+    fn grid_coarsens_into_squares_whatever_its_pose() {
+        let (p, o, c) = grid(16, 1);
+        let h = Hierarchy::build(&p, &o, &c).unwrap();
+        // Four quads are a 2 × 2 square (8 boundary edges, where an L, an S or a row of four
+        // has 10), sixteen a 4 × 4 (16, where 2 × 8 has 20).
+        for node in 0..=h.root() {
+            let sides = h.node_boundary(node).len();
+            match h.leaf_counts[node as usize] {
+                4 => assert_eq!(sides, 8, "node {node}"),
+                16 => assert_eq!(sides, 16, "node {node}"),
+                _ => {}
+            }
+        }
+        // Rolled up round a cylinder and sheared, the grid coarsens the same.
+        let rolled: Vec<Point> = p
+            .iter()
+            .map(|q| {
+                let (s, c) = (q.x / 3.0).sin_cos();
+                Point::new(3.0 * s + 0.3 * q.y, q.y, 3.0 * c)
+            })
+            .collect();
+        assert_eq!(
+            Hierarchy::build(&rolled, &o, &c).unwrap().children,
+            h.children
+        );
+    }
+
+    #[test]
+    fn repeated_faces_and_shared_edges_build() {
+        // The same quad three times, and three triangles on one edge: every pair is a seam of
+        // all the shared edges, more than the superface has.
+        let p: Vec<Point> = [[0., 0.], [1., 0.], [1., 1.], [0., 1.], [0.5, -1.]]
+            .iter()
+            .map(|&[x, y]| Point::new(x, y, 0.0))
+            .collect();
+        let c = [
+            0, 1, 2, 3, 0, 1, 2, 3, 3, 2, 1, 0, 0, 1, 4, 1, 0, 2, 0, 1, 3,
+        ];
+        let h = Hierarchy::build(&p, &[0, 4, 8, 12, 15, 18, 21], &c).unwrap();
+        assert_eq!(h.leaf_counts[h.root() as usize], 6);
     }
 
     #[test]

@@ -58,8 +58,9 @@ pub struct Hierarchy {
 impl Hierarchy {
     /// Builds the hierarchy of a polygon mesh given as CSR faces, and refits it at `positions`.
     ///
-    /// `positions` also guide the coarsening (compact superfaces are preferred), so pass a
-    /// representative pose such as the rest pose; the tree stays valid for any later positions.
+    /// The tree depends on the topology, except where pieces with no neighbour left are paired
+    /// by where they lie at `positions`, so pass a representative pose such as the rest pose;
+    /// the tree stays valid for any later positions.
     ///
     /// # Errors
     /// [`CollideError`] when there are no faces, the CSR tables are inconsistent, a face is

@@ -267,3 +267,149 @@ pub fn wave(p: &Point, t: f64) -> Point {
         0.1 * (6.0 * p.x + 3.0 * t).sin() * (4.0 * p.y + t).cos(),
     )
 }
+
+/// A random fold of a sheet lying in the plane z = 0: the part beyond a line through `origin`
+/// along `along` (a unit vector of the plane) wraps round a cylinder of radius `radius` by the
+/// angle `angle` (π lays it back over the rest, 2·`radius` above), and every point is then
+/// pushed along the folded surface's normal by `ripple` sine waves `(amplitude, wave vector,
+/// phase)`, wrinkling both layers.
+#[derive(Clone, Debug)]
+pub struct Fold {
+    pub origin: Point,
+    pub along: [f64; 2],
+    pub radius: f64,
+    pub angle: f64,
+    pub ripples: Vec<(f64, [f64; 2], f64)>,
+}
+
+impl Fold {
+    /// A fold of the unit square nearly closed (2.6–3.1 rad) round a line through its middle
+    /// part, with ripples about as high as the gap between the layers.
+    pub fn random(rng: &mut Rng) -> Self {
+        let turn = std::f64::consts::TAU * rng.unit();
+        let radius = 0.03 + 0.07 * rng.unit();
+        let ripples = random_ripples(rng, radius);
+        Self {
+            origin: Point::new(0.3 + 0.4 * rng.unit(), 0.3 + 0.4 * rng.unit(), 0.0),
+            along: [turn.cos(), turn.sin()],
+            radius,
+            angle: 2.6 + 0.5 * rng.unit(),
+            ripples,
+        }
+    }
+
+    /// The same fold a step later: closed further by `close` radians, the ripples drifted by
+    /// `drift` radians of phase.
+    pub fn later(&self, close: f64, drift: f64) -> Self {
+        let mut next = self.clone();
+        next.angle += close;
+        for r in &mut next.ripples {
+            r.2 += drift;
+        }
+        next
+    }
+
+    /// Where the point `p` of the flat sheet goes.
+    pub fn apply(&self, p: &Point) -> Point {
+        let [dx, dy] = self.along;
+        let (rx, ry) = (p.x - self.origin.x, p.y - self.origin.y);
+        // Across the fold line and along it.
+        let (s, t) = (rx * -dy + ry * dx, rx * dx + ry * dy);
+        let r = self.radius;
+        let (mut u, mut z, a) = if s <= 0.0 {
+            (s, 0.0, 0.0)
+        } else if s <= r * self.angle {
+            let a = s / r;
+            (r * a.sin(), r - r * a.cos(), a)
+        } else {
+            let a = self.angle;
+            let rest = s - r * a;
+            (
+                r * a.sin() + rest * a.cos(),
+                r - r * a.cos() + rest * a.sin(),
+                a,
+            )
+        };
+        let lift = ripple(&self.ripples, p);
+        u -= lift * a.sin();
+        z += lift * a.cos();
+        Point::new(
+            self.origin.x + u * -dy + t * dx,
+            self.origin.y + u * dx + t * dy,
+            z,
+        )
+    }
+}
+
+/// A ripple `(amplitude, wave vector, phase)`.
+pub type Ripple = (f64, [f64; 2], f64);
+
+/// Two ripples of wave numbers 4–14 in random directions, `0.3..1.5 × height` high.
+fn random_ripples(rng: &mut Rng, height: f64) -> Vec<Ripple> {
+    (0..2)
+        .map(|_| {
+            let k = 4.0 + 10.0 * rng.unit();
+            let dir = std::f64::consts::TAU * rng.unit();
+            let amplitude = height * (0.3 + 1.2 * rng.unit());
+            (amplitude, [k * dir.cos(), k * dir.sin()], 6.0 * rng.unit())
+        })
+        .collect()
+}
+
+/// The sum of `ripples` at the point `p` of the flat sheet.
+fn ripple(ripples: &[Ripple], p: &Point) -> f64 {
+    ripples
+        .iter()
+        .map(|&(h, [kx, ky], phase)| h * (kx * p.x + ky * p.y + phase).sin())
+        .sum()
+}
+
+/// A random coil of the unit square: a ramp winding `turns` times round the z axis between
+/// radii 0.5 and 1, rising `pitch` a radian, rippled as high as half the gap between its
+/// turns. Its normals all lean less than 90° from the z axis, so only its contour shows that
+/// it passes over itself.
+#[derive(Clone, Debug)]
+pub struct Coil {
+    pub turns: f64,
+    pub pitch: f64,
+    pub ripples: Vec<Ripple>,
+}
+
+impl Coil {
+    /// 1.1–1.6 turns, 1–3 cm a radian.
+    pub fn random(rng: &mut Rng) -> Self {
+        let pitch = 0.01 + 0.02 * rng.unit();
+        let mut ripples = random_ripples(rng, pitch * std::f64::consts::PI);
+        // Gentle enough for the normals to stay in a cone round the z axis.
+        for r in &mut ripples {
+            r.1 = r.1.map(|k| k / 3.0);
+        }
+        Self {
+            turns: 1.1 + 0.5 * rng.unit(),
+            pitch,
+            ripples,
+        }
+    }
+
+    /// The same coil a step later, pressed flatter by the factor `squash`, the ripples
+    /// drifted by `drift` radians of phase.
+    pub fn later(&self, squash: f64, drift: f64) -> Self {
+        let mut next = self.clone();
+        next.pitch *= squash;
+        for r in &mut next.ripples {
+            r.2 += drift;
+        }
+        next
+    }
+
+    /// Where the point `p` of the flat sheet goes.
+    pub fn apply(&self, p: &Point) -> Point {
+        let a = std::f64::consts::TAU * self.turns * p.x;
+        let rho = 0.5 + 0.5 * p.y;
+        Point::new(
+            rho * a.cos(),
+            rho * a.sin(),
+            self.pitch * a + ripple(&self.ripples, p),
+        )
+    }
+}
