@@ -192,6 +192,9 @@ impl Collisions {
         mass: &[f64],
     ) -> Result<(), CollideError> {
         self.contacts.clear();
+        if let Some(surface) = &mut self.surface {
+            surface.forget();
+        }
         if let Some(obstacle) = &mut self.obstacle {
             obstacle.begin_substep(t0, h);
             let lifted = &mut self.friction.state.lifted;

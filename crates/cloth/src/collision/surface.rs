@@ -18,7 +18,7 @@
 //!
 //! Every sum runs in a fixed order, so the result does not depend on the thread count.
 
-use tailor_collide::{CollideError, Hierarchy};
+use tailor_collide::{Closest, CollideError, Hierarchy};
 use tailor_subdiv::{Point, StencilTable};
 
 use super::obstacle::away_from;
@@ -43,6 +43,16 @@ pub(crate) struct Surface {
     /// The refined faces, when the surface must not pass through itself either.
     layers: Option<SurfaceLayers>,
     points: Vec<Point>,
+    /// What the body's hierarchy answered for each refined point at the position `measured`
+    /// holds, valid within one substep ([`Self::forget`]): the body's end positions do not
+    /// change within it, so a refined point that has not moved since is not measured again.
+    closest: Vec<Option<Closest>>,
+    measured: Vec<Point>,
+    known: bool,
+    /// The refined points to measure, and their answers.
+    moved: Vec<u32>,
+    queries: Vec<Point>,
+    answers: Vec<Option<Closest>>,
     /// Per control point: weighted sums of requested moves and of body velocities, and of the
     /// weights.
     lift: Vec<Vec3>,
@@ -56,6 +66,12 @@ impl Surface {
         let n = stencils.control_points;
         Self {
             points: vec![Point::origin(); stencils.len()],
+            closest: vec![None; stencils.len()],
+            measured: vec![Point::origin(); stencils.len()],
+            known: false,
+            moved: Vec::new(),
+            queries: Vec::new(),
+            answers: Vec::new(),
             stencils,
             layers,
             lift: vec![Vec3::zeros(); n],
@@ -78,7 +94,8 @@ impl Surface {
         let mut moved = 0;
         for _ in 0..ROUNDS {
             self.stencils.apply(m.x, &mut self.points);
-            let closest = body.closest_points(&self.points, thickness)?;
+            self.measure(body, thickness)?;
+            let closest = &self.closest;
             self.lift.fill(Vec3::zeros());
             self.body.fill(Vec3::zeros());
             self.weight.fill(0.0);
@@ -137,8 +154,119 @@ impl Surface {
         self.layers.as_mut().map(|layers| (stencils, layers))
     }
 
+    /// Forgets what the body answered: its end positions change with the substep.
+    pub fn forget(&mut self) {
+        self.known = false;
+    }
+
+    /// The body's closest point within `thickness` of every refined point into
+    /// [`Self::closest`]: all of them after [`Self::forget`], else only those that moved since
+    /// they were measured. Each query's answer depends on its point alone (the hierarchy's
+    /// answers do not depend on which other points are asked with it, as they do not on the
+    /// thread count), so the answers are the same bits as measuring every point.
+    fn measure(&mut self, body: &Hierarchy, thickness: f64) -> Result<(), CollideError> {
+        self.moved.clear();
+        if self.known {
+            let changed = self.points.iter().zip(&self.measured);
+            self.moved.extend(
+                (0..)
+                    .zip(changed)
+                    .filter(|(_, (p, q))| p != q)
+                    .map(|(k, _)| k),
+            );
+        } else {
+            self.moved.extend(0..self.points.len() as u32);
+        }
+        self.queries.clear();
+        self.queries
+            .extend(self.moved.iter().map(|&k| self.points[k as usize]));
+        body.closest_points_into(&self.queries, thickness, &mut self.answers)?;
+        for (&k, answer) in self.moved.iter().zip(&self.answers) {
+            self.closest[k as usize] = *answer;
+            self.measured[k as usize] = self.points[k as usize];
+        }
+        self.known = true;
+        Ok(())
+    }
+
     /// Whether the surface must clear itself.
     pub fn has_layers(&self) -> bool {
         self.layers.is_some()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use tailor_subdiv::Refiner;
+
+    use super::*;
+    use crate::shapes::{block, centred_sheet};
+
+    /// A 5² sheet's level-1 surface at rest at y = 0, its control points free, and a 1 m box
+    /// whose top is at `top`.
+    fn sheet_and_box(top: f64) -> (Surface, Vec<Point>, Hierarchy) {
+        let sheet = centred_sheet(5, 1.0);
+        let surface = Surface::new(Refiner::new(&sheet, 1).stencils(), None);
+        let low = Point::new(-0.5, top - 1.0, -0.5);
+        let body = block(low, low + Vec3::new(1.0, 1.0, 1.0));
+        let hierarchy =
+            Hierarchy::build(body.positions(), body.face_offsets(), body.face_vertices()).unwrap();
+        (surface, sheet.positions().to_vec(), hierarchy)
+    }
+
+    /// Lifts `x` (a substep of 0.01 s from `x`, at rest) off `body`; returns the moves made.
+    fn lift(surface: &mut Surface, body: &Hierarchy, x: &mut [Point]) -> u32 {
+        let x0 = x.to_vec();
+        let mut v = vec![Vec3::zeros(); x.len()];
+        let inverse_mass = vec![1.0; x.len()];
+        let mut m = Substep {
+            h: 0.01,
+            x0: &x0,
+            x,
+            v: &mut v,
+            inverse_mass: &inverse_mass,
+        };
+        surface
+            .clear(body, |_| Vec3::zeros(), 0.005, &mut m)
+            .unwrap()
+    }
+
+    /// Within a substep the lift measures again only the refined points that moved; a body
+    /// that moved with the next substep is measured again everywhere, and the answers are
+    /// those of measuring every point.
+    #[test]
+    fn the_lift_measures_again_what_moved_and_everything_after_a_substep() {
+        let (mut surface, mut x, mut body) = sheet_and_box(-0.1);
+        body.refit(&body_positions(-0.1), 0.0).unwrap();
+        assert_eq!(
+            lift(&mut surface, &body, &mut x),
+            0,
+            "10 cm below: nothing to lift"
+        );
+        // The next substep: the box rises to 2 mm below the sheet.
+        body.refit(&body_positions(-0.002), 0.0).unwrap();
+        surface.forget();
+        let lifted = lift(&mut surface, &body, &mut x);
+        assert!(lifted > 0, "the box 2 mm below must lift the sheet");
+        // Measuring only what moved gives the same bits as measuring everything.
+        let (mut fresh, mut y, _) = sheet_and_box(-0.1);
+        lift(&mut fresh, &body, &mut y);
+        assert_eq!(x, y);
+        assert_eq!(surface.closest, fresh.closest);
+        for (k, p) in fresh.points.iter().enumerate() {
+            let c = fresh.closest[k].map_or(f64::INFINITY, |c| c.distance);
+            assert!(
+                c >= 0.005 * (1.0 - 1e-9),
+                "refined point {k} at {p} is {c} m off"
+            );
+        }
+    }
+
+    /// The vertices of [`sheet_and_box`]'s box with its top at `top`.
+    fn body_positions(top: f64) -> Vec<Point> {
+        let low = Point::new(-0.5, top - 1.0, -0.5);
+        block(low, low + Vec3::new(1.0, 1.0, 1.0))
+            .positions()
+            .to_vec()
     }
 }
