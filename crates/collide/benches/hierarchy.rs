@@ -3,7 +3,8 @@
 //! of 10k and 100k triangles (1M with `TAILOR_BENCH_1M=1`), against parry's `TriMesh`
 //! with `TriMeshFlags::DEFORMABLE` (refit through `set_vertices`, point projection) and parry's
 //! `Bvh` self-traversal, in the same run. Both sides get the same triangles. Before the timings
-//! it prints the hierarchy's heap bytes per face at each size.
+//! it prints the hierarchy's heap bytes per face at each size. Proximity also runs on a sheet
+//! of points draped over a sphere, the body of a drape.
 //!
 //! Every benchmark stops after [`MAX_TIME`] seconds even if it has fewer samples than asked:
 //! the 10k and 100k sizes always get their full count, the 1M size fewer.
@@ -18,7 +19,10 @@ use divan::Bencher;
 use parry3d_f64::partitioning::BvhWorkspace;
 use parry3d_f64::query::PointQuery;
 use rayon::prelude::*;
-use shapes::{SHAPES, glam, parry, parry_boxes, parry_pairs, shape, sizes, tailor, waving_sheet};
+use shapes::{
+    SHAPES, draped_points, glam, parry, parry_boxes, parry_pairs, shape, sizes, tailor, uv_sphere,
+    waving_sheet,
+};
 use tailor_collide::Point;
 
 /// Seconds after which a benchmark stops sampling.
@@ -114,6 +118,33 @@ mod proximity {
         bencher.bench(|| {
             q.par_iter()
                 .map(|&p| mesh.project_local_point_with_max_dist(p, false, 0.05))
+                .collect::<Vec<_>>()
+        });
+    }
+}
+
+/// The points of a 128 × 128 sheet draped over a UV sphere of 1106 vertices (resting 0 to
+/// 50 mm off it in the middle, hanging far from it elsewhere), within a cloth thickness (5 mm).
+#[divan::bench_group(max_time = MAX_TIME)]
+mod draped {
+    use super::*;
+
+    #[divan::bench]
+    fn tailor_closest_points(bencher: Bencher) {
+        let body = uv_sphere(23, 48, 0.3);
+        let h = tailor(&body, &body.positions);
+        let q = draped_points(128, 0.3);
+        bencher.bench(|| h.closest_points(&q, 0.005).unwrap());
+    }
+
+    #[divan::bench]
+    fn parry_project_point(bencher: Bencher) {
+        let body = uv_sphere(23, 48, 0.3);
+        let mesh = parry(&body, &body.positions);
+        let q = glam(&draped_points(128, 0.3));
+        bencher.bench(|| {
+            q.par_iter()
+                .map(|&p| mesh.project_local_point_with_max_dist(p, false, 0.005))
                 .collect::<Vec<_>>()
         });
     }

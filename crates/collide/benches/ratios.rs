@@ -6,7 +6,9 @@
 //! on the waving sheet and the bending tube; self-collision also on the rolling sheet and on
 //! the folded drape (quads, as a refined cloth surface; parry gets their fan triangles),
 //! whose self-proximity (every vertex against the faces within a cloth thickness, leaving out
-//! the faces around it in the rest shape as the cloth's repulsion does) is timed too.
+//! the faces around it in the rest shape as the cloth's repulsion does) is timed too. First of
+//! all, `proximity draped sphere` times the closest points of a body (a UV sphere) to a sheet
+//! of points draped over it, within a cloth thickness.
 //!
 //! The parry side of every self-collision line is its sequential `Bvh` self-traversal
 //! (overlapping leaf pairs only, no exact test) over the boxes tailor's query has to pair:
@@ -30,7 +32,9 @@ use parry3d_f64::partitioning::BvhWorkspace;
 use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::TriMesh;
 use rayon::prelude::*;
-use shapes::{SHAPES, glam, parry, parry_boxes, parry_pairs, shape, sizes, tailor};
+use shapes::{
+    SHAPES, draped_points, glam, parry, parry_boxes, parry_pairs, shape, sizes, tailor, uv_sphere,
+};
 use tailor_collide::{Hierarchy, Point};
 
 /// The fastest of `runs` alternating runs of `ours` and `theirs`, in milliseconds.
@@ -67,6 +71,7 @@ fn measure(what: &str, triangles: usize, runs: usize, ours: impl FnMut(), theirs
 }
 
 fn main() {
+    draped_on_sphere();
     for triangles in sizes() {
         let runs = if triangles >= 1_000_000 { 5 } else { 20 };
         for name in SHAPES {
@@ -122,6 +127,37 @@ fn main() {
             }
         }
     }
+}
+
+/// The closest point of a body to every point of a cloth draped over it, within a cloth
+/// thickness: a UV sphere of 1106 vertices (1056 quads, 96 triangles, 30 cm radius) under a
+/// 128 × 128 sheet of points, the middle resting 0 to 50 mm off the sphere and the rest
+/// hanging far from it, as a refined cloth surface in a drape.
+fn draped_on_sphere() {
+    let what = "proximity draped sphere";
+    if !wanted(what) {
+        return;
+    }
+    let body = uv_sphere(23, 48, 0.3);
+    let (h, mesh) = (
+        tailor(&body, &body.positions),
+        parry(&body, &body.positions),
+    );
+    let queries = draped_points(128, 0.3);
+    let glam_queries = glam(&queries);
+    measure(
+        what,
+        mesh.indices().len(),
+        200,
+        || drop(black_box(h.closest_points(&queries, THICKNESS).unwrap())),
+        || {
+            let projections: Vec<_> = glam_queries
+                .par_iter()
+                .map(|&p| mesh.project_local_point_with_max_dist(p, false, THICKNESS))
+                .collect();
+            drop(black_box(projections));
+        },
+    );
 }
 
 /// Cloth thickness for self-proximity, in metres.

@@ -14,7 +14,11 @@
 //! run: it is close, so the search starts with nearly its final radius and climbs from that
 //! face instead of descending from the root: about 30% fewer box tests than a plain descent
 //! on a coherent set of queries. The seed only changes the order of the visits, never the
-//! answer, so answers do not depend on how the queries are split between threads. Zero-area
+//! answer, so answers do not depend on how the queries are split between threads. A seed whose
+//! box is out of reach (the query is far from where the previous one was answered, or the
+//! previous queries found nothing and left an old seed) is not used: climbing from it would
+//! test a box at every level, where a descent from the root stops at the root or its
+//! children. Zero-area
 //! triangles are rare, so the search ignores them and runs again without them only when one of
 //! them won.
 //!
@@ -320,11 +324,18 @@ impl Hierarchy {
         strict: bool,
     ) -> Option<Candidate> {
         let mut best: Best = (None, limit);
-        if let Some(f) = scratch.seed {
+        // A seed out of reach (the answer to a query near another part of the mesh, or the
+        // last one found before a run of queries far from the mesh) would only make the walk
+        // climb every level: a plain descent from the root, which prunes at the root's
+        // children, is cheaper then.
+        let seed = scratch
+            .seed
+            .filter(|&f| self.boxes().face_distance2(f, q) <= prune_bound(limit));
+        if let Some(f) = seed {
             self.consider(&mut best, f, q, strict);
         }
         let bound = prune_bound(best.1);
-        self.visit_near(q, bound, scratch.seed, &mut scratch.stack, |f| {
+        self.visit_near(q, bound, seed, &mut scratch.stack, |f| {
             self.consider(&mut best, f, q, strict);
             prune_bound(best.1)
         });

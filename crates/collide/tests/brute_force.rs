@@ -832,3 +832,40 @@ fn memory_is_linear_in_faces() {
         "{small} vs {large} bytes per face"
     );
 }
+
+#[test]
+fn runs_of_queries_resting_on_and_hanging_off_a_body_match_brute_force() {
+    // Runs of queries as a cloth draped over a body asks them: bands resting on the sphere
+    // (0 to 2% of its radius off it, some exactly on a vertex), then bands far from it (inside
+    // and outside its box), so that the face answering one query is often out of reach of the
+    // next and the root's box alone rejects many. At radii from a millimetre to a kilometre the
+    // outward-rounded single-precision boxes and the pruning slack meet rounding at every
+    // scale; the limits run from a hair's breadth to infinity.
+    let mut rng = Rng::new(23);
+    for r in [1e-3, 1.0, 1e3] {
+        let m = sphere(12, 16, 1.0);
+        let positions = m.mapped(|p| Point::from(p.coords * r));
+        let h = Hierarchy::build(&positions, &m.offsets, &m.corners).unwrap();
+        let mut queries = Vec::new();
+        for band in 0..12 {
+            for _ in 0..25 {
+                let dir = rng.point(1.0).coords.normalize();
+                let lift = match band % 3 {
+                    0 => 0.02 * rng.unit(),
+                    1 => 0.1 + 2.0 * rng.unit(),
+                    _ => 1e-9 * (rng.unit() - 0.5),
+                };
+                queries.push(Point::from(dir * r * (1.0 + lift)));
+            }
+            queries.push(positions[band * 7]);
+        }
+        for d in [1e-9, 0.004, 0.02, 0.5, f64::INFINITY].map(|d| d * r) {
+            let got = h.closest_points(&queries, d).unwrap();
+            for (i, q) in queries.iter().enumerate() {
+                let want = nearest(&all_distances(&m, &positions, q), d, |_| false);
+                let got_key = got[i].map(|c| (c.distance, c.face, c.triangle));
+                assert_eq!(got_key, want, "radius {r}: query {i} within {d}");
+            }
+        }
+    }
+}

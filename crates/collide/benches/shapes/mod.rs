@@ -147,3 +147,75 @@ pub fn parry_pairs(bvh: &Bvh, workspace: &mut BvhWorkspace) -> usize {
     bvh.traverse_bvtt_single_tree::<false>(workspace, &mut |_, _| pairs += 1);
     pairs
 }
+
+/// A UV sphere of radius `r` as a body is exported: quads between `rings` latitude rings of
+/// `segments` vertices, and a fan of triangles to a vertex at each pole (23 rings of 48 give
+/// 1106 vertices, 1056 quads and 96 triangles).
+pub fn uv_sphere(rings: u32, segments: u32, r: f64) -> Mesh {
+    let mut positions = vec![Point::new(0.0, 0.0, r)];
+    for j in 0..rings {
+        let phi = std::f64::consts::PI * (j as f64 + 1.0) / (rings as f64 + 1.0);
+        for i in 0..segments {
+            let theta = std::f64::consts::TAU * i as f64 / segments as f64;
+            positions.push(Point::new(
+                r * phi.sin() * theta.cos(),
+                r * phi.sin() * theta.sin(),
+                r * phi.cos(),
+            ));
+        }
+    }
+    let south = positions.len() as u32;
+    positions.push(Point::new(0.0, 0.0, -r));
+    let at = |j: u32, i: u32| 1 + j * segments + i % segments;
+    let mut faces: Vec<Vec<u32>> = (0..segments)
+        .map(|i| vec![0, at(0, i), at(0, i + 1)])
+        .collect();
+    for j in 0..rings - 1 {
+        for i in 0..segments {
+            faces.push(vec![at(j, i), at(j + 1, i), at(j + 1, i + 1), at(j, i + 1)]);
+        }
+    }
+    faces.extend((0..segments).map(|i| vec![south, at(rings - 1, i + 1), at(rings - 1, i)]));
+    let mut offsets = vec![0];
+    let mut corners = Vec::new();
+    for f in faces {
+        corners.extend(f);
+        offsets.push(corners.len() as u32);
+    }
+    Mesh {
+        positions,
+        offsets,
+        corners,
+    }
+}
+
+/// The points of an `n × n` sheet, 2 m square, draped over a sphere of radius `r` centred
+/// under its middle: the middle lies on the sphere, each point lifted off it by 0 to 50 mm
+/// (mostly a few millimetres: the lift is 50 mm times the cube of a pseudo-random fraction),
+/// and the rest hangs straight down from the equator at the same lift, most of it far below.
+pub fn draped_points(n: u32, r: f64) -> Vec<Point> {
+    let mut points = Vec::with_capacity((n * n) as usize);
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (
+                2.0 * i as f64 / (n - 1) as f64 - 1.0,
+                2.0 * j as f64 / (n - 1) as f64 - 1.0,
+            );
+            let hash = ((i as f64 * 12.9898 + j as f64 * 78.233).sin() * 43_758.545).fract();
+            let lift = 0.05 * hash.abs().powi(3);
+            let (s, angle) = ((x * x + y * y).sqrt(), (y.atan2(x)));
+            let (sin, cos) = angle.sin_cos();
+            let polar = s / r;
+            let p = if polar <= std::f64::consts::FRAC_PI_2 {
+                let (ps, pc) = polar.sin_cos();
+                let h = r + lift;
+                Point::new(h * ps * cos, h * ps * sin, h * pc)
+            } else {
+                let h = r + lift;
+                Point::new(h * cos, h * sin, -(s - r * std::f64::consts::FRAC_PI_2))
+            };
+            points.push(p);
+        }
+    }
+    points
+}

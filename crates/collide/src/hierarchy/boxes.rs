@@ -16,7 +16,8 @@
 //! each face boxed once and each record written once.
 //!
 //! Point queries descend depth first, nearer child first, pruning on a bound that the caller
-//! may shrink as it finds closer faces. A query that starts from a seed face (the answer to a
+//! may shrink as it finds closer faces; a query farther than the bound from the root's box
+//! stops there, seed or not. A query that starts from a seed face (the answer to a
 //! nearby query) instead climbs from the seed's record to the root, descending into each
 //! sibling subtree whose box is within the bound: one box test per level where a descent from
 //! the root needs two, and the faces near the seed come first.
@@ -247,6 +248,17 @@ impl Boxes {
         heap(&self.records) + heap(&self.leaf_slot) + heap(&self.vertices)
     }
 
+    /// The squared distance from `q` to the box of face `f` (0 inside).
+    pub(crate) fn face_distance2(&self, f: u32, q: DVec3) -> f64 {
+        match self.leaf_slot.get(f as usize) {
+            Some(&slot) if slot != NONE => distance2(
+                &self.records[(slot >> 1) as usize].boxes[(slot & 1) as usize],
+                q,
+            ),
+            _ => distance2(&self.root, q),
+        }
+    }
+
     /// Calls `leaf(face)` for every face whose box is within squared distance `bound` of `q`,
     /// nearer faces first; `leaf` returns the bound from then on, which may only shrink. With
     /// a `seed` face, which the caller has already considered, the walk climbs from it (see the
@@ -259,16 +271,17 @@ impl Boxes {
         stack: &mut Vec<Pending>,
         mut leaf: impl FnMut(u32) -> f64,
     ) {
+        if distance2(&self.root, q) > bound {
+            return;
+        }
         let Some(root) = self.records.len().checked_sub(1) else {
-            if seed.is_none() && distance2(&self.root, q) <= bound {
+            if seed.is_none() {
                 leaf(0);
             }
             return;
         };
         let Some(seed) = seed else {
-            if distance2(&self.root, q) <= bound {
-                self.descend(root as u32, q, bound, stack, &mut leaf);
-            }
+            self.descend(root as u32, q, bound, stack, &mut leaf);
             return;
         };
         let slot = self.leaf_slot[seed as usize];
