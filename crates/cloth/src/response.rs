@@ -292,9 +292,6 @@ impl Response {
         pushed_heavier: bool,
         which: Layers,
     ) -> Result<u32, CollideError> {
-        if which == Layers::Surface {
-            self.collisions.begin_surface_layers(motion.x0);
-        }
         let also = pushed_heavier.then_some(self.moved.as_slice());
         hold(
             &mut self.held,

@@ -129,14 +129,6 @@ impl Collisions {
         self.surface.as_ref().is_some_and(Surface::has_layers)
     }
 
-    /// The refined surface's positions at the substep's start `x0`, for the
-    /// [`Layers::Surface`] passes that follow.
-    pub fn begin_surface_layers(&mut self, x0: &[Point]) {
-        if let Some((stencils, layers)) = self.surface.as_mut().and_then(Surface::layers) {
-            layers.begin(stencils, x0);
-        }
-    }
-
     /// Whether there is an obstacle.
     pub fn has_obstacle(&self) -> bool {
         self.obstacle.is_some()
@@ -193,7 +185,7 @@ impl Collisions {
     ) -> Result<(), CollideError> {
         self.contacts.clear();
         if let Some(surface) = &mut self.surface {
-            surface.forget();
+            surface.begin_substep(x0);
         }
         if let Some(obstacle) = &mut self.obstacle {
             obstacle.begin_substep(t0, h);

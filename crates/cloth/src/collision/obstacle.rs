@@ -354,16 +354,21 @@ mod tests {
     use crate::energy::Mat3;
     use crate::shapes::block;
 
-    #[test]
-    fn a_vertex_the_solve_takes_into_the_body_becomes_a_contact_on_its_start_plane() {
-        // A floor whose top is y = 0; substeps of 10 ms, thickness 5 mm.
+    /// A floor whose top is y = 0 (a 2 m box), as an obstacle.
+    fn floor() -> Obstacle {
         let floor = block(Point::new(-1.0, -1.0, -1.0), Point::new(1.0, 0.0, 1.0));
-        let mut obstacle = Obstacle::new(
+        Obstacle::new(
             floor.positions(),
             floor.face_offsets(),
             floor.face_vertices(),
         )
-        .expect("a box");
+        .expect("a box")
+    }
+
+    #[test]
+    fn a_vertex_the_solve_takes_into_the_body_becomes_a_contact_on_its_start_plane() {
+        // A floor whose top is y = 0; substeps of 10 ms, thickness 5 mm.
+        let mut obstacle = floor();
         let settings = Settings::default();
         let h = 0.01;
         obstacle.begin_substep(0.0, h);
@@ -400,13 +405,7 @@ mod tests {
     fn gravity_draws_only_resting_vertices_into_contact_before_the_solve() {
         // A floor whose top is y = 0; substeps of 1/48 s, over which gravity pulls a vertex
         // at rest down by g h² = 4.3 mm; thickness 5 mm.
-        let floor = block(Point::new(-1.0, -1.0, -1.0), Point::new(1.0, 0.0, 1.0));
-        let mut obstacle = Obstacle::new(
-            floor.positions(),
-            floor.face_offsets(),
-            floor.face_vertices(),
-        )
-        .expect("a box");
+        let mut obstacle = floor();
         let settings = Settings::default();
         let h = 1.0 / 48.0;
         obstacle.begin_substep(0.0, h);

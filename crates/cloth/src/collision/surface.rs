@@ -44,7 +44,7 @@ pub(crate) struct Surface {
     layers: Option<SurfaceLayers>,
     points: Vec<Point>,
     /// What the body's hierarchy answered for each refined point at the position `measured`
-    /// holds, valid within one substep ([`Self::forget`]): the body's end positions do not
+    /// holds, valid within one substep ([`Self::begin_substep`]): the body's end positions do not
     /// change within it, so a refined point that has not moved since is not measured again.
     closest: Vec<Option<Closest>>,
     measured: Vec<Point>,
@@ -154,13 +154,18 @@ impl Surface {
         self.layers.as_mut().map(|layers| (stencils, layers))
     }
 
-    /// Forgets what the body answered: its end positions change with the substep.
-    pub fn forget(&mut self) {
+    /// A new substep from control positions `x0`: what the body answered is forgotten (its
+    /// end positions change with the substep), and the refined surface's start is taken for
+    /// its self passes.
+    pub fn begin_substep(&mut self, x0: &[Point]) {
         self.known = false;
+        if let Some(layers) = &mut self.layers {
+            layers.begin(&self.stencils, x0);
+        }
     }
 
     /// The body's closest point within `thickness` of every refined point into
-    /// [`Self::closest`]: all of them after [`Self::forget`], else only those that moved since
+    /// [`Self::closest`]: all of them after [`Self::begin_substep`], else only those that moved since
     /// they were measured. Each query's answer depends on its point alone (the hierarchy's
     /// answers do not depend on which other points are asked with it, as they do not on the
     /// thread count), so the answers are the same bits as measuring every point.
@@ -245,7 +250,7 @@ mod tests {
         );
         // The next substep: the box rises to 2 mm below the sheet.
         body.refit(&body_positions(-0.002), 0.0).unwrap();
-        surface.forget();
+        surface.begin_substep(&x);
         let lifted = lift(&mut surface, &body, &mut x);
         assert!(lifted > 0, "the box 2 mm below must lift the sheet");
         // Measuring only what moved gives the same bits as measuring everything.

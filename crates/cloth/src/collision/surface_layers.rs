@@ -40,9 +40,10 @@ pub(super) struct SurfaceLayers {
     impacts: Impacts,
     /// The control points an impulse round changed.
     touched: Vec<bool>,
-    /// One impact's control points and weights.
+    /// One impact's control points and weights, and the terms they are summed from.
     vertices: Vec<u32>,
     alpha: Vec<f64>,
+    terms: Vec<(u32, f64)>,
 }
 
 impl SurfaceLayers {
@@ -65,6 +66,7 @@ impl SurfaceLayers {
             touched: vec![false; rest.len()],
             vertices: Vec::new(),
             alpha: Vec::new(),
+            terms: Vec::new(),
         })
     }
 
@@ -102,6 +104,7 @@ impl SurfaceLayers {
             touched,
             vertices,
             alpha,
+            terms,
         } = self;
         touched.fill(false);
         let mut handled = 0;
@@ -109,7 +112,7 @@ impl SurfaceLayers {
             let Some((normal, gap)) = pair.normal_and_gap(start, end) else {
                 continue;
             };
-            control_weights(stencils, &pair, vertices, alpha);
+            control_weights(stencils, &pair, terms, vertices, alpha);
             let target = (SEPARATION * thickness - gap) / m.h;
             if m.push_apart(vertices, alpha, normal, target) {
                 for &k in vertices.iter() {
@@ -160,10 +163,11 @@ impl SurfaceLayers {
 fn control_weights(
     stencils: &StencilTable,
     pair: &Pair,
+    terms: &mut Vec<(u32, f64)>,
     vertices: &mut Vec<u32>,
     alpha: &mut Vec<f64>,
 ) {
-    let mut terms: Vec<(u32, f64)> = Vec::new();
+    terms.clear();
     for (&k, &a) in pair.vertices.iter().zip(&pair.alpha) {
         let (columns, weights) = stencils.rows.row(k as usize);
         terms.extend(columns.iter().zip(weights).map(|(&j, &w)| (j, a * w)));
@@ -171,7 +175,7 @@ fn control_weights(
     terms.sort_unstable_by_key(|&(j, _)| j);
     vertices.clear();
     alpha.clear();
-    for (j, w) in terms {
+    for &(j, w) in terms.iter() {
         if vertices.last() == Some(&j) {
             *alpha.last_mut().expect("a weight per vertex") += w;
         } else {
@@ -216,7 +220,7 @@ mod tests {
             .collect();
         let mut refined = vec![Point::origin(); stencils.len()];
         stencils.apply(&v, &mut refined);
-        let (mut vertices, mut alpha) = (Vec::new(), Vec::new());
+        let (mut terms, mut vertices, mut alpha) = (Vec::new(), Vec::new(), Vec::new());
         let last = stencils.len() as u32 - 1;
         for (first, spread) in [(40, 1), (40, 17), (3, 90), (0, last / 3)] {
             let pair = Pair {
@@ -230,7 +234,7 @@ mod tests {
                 time: 0.5,
                 triangle: true,
             };
-            control_weights(&stencils, &pair, &mut vertices, &mut alpha);
+            control_weights(&stencils, &pair, &mut terms, &mut vertices, &mut alpha);
             let refined_sum: Vec3 = pair
                 .vertices
                 .iter()
