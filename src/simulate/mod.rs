@@ -389,10 +389,11 @@ impl<'a> Shot<'a> {
             .with_context(in_cloth)?;
         let out = &scene.output;
         let cloth = Surface::new(&c.doc.mesh, out.level, out.limit_normals)?;
-        // At level 0 the written surface is the control mesh, which the simulator's own
-        // self-collision already keeps clear.
+        // The written faces at every level, the control mesh's own at level 0: the lift moves
+        // control points after the garment's self tests, and only the written surface's
+        // self tests, alternating with the lift, keep what is written clear.
         let refined = cloth.mesh();
-        let faces = (out.level > 0).then(|| (refined.face_offsets(), refined.face_vertices()));
+        let faces = Some((refined.face_offsets(), refined.face_vertices()));
         simulator
             .set_collision_surface(cloth.stencils().clone(), faces)
             .with_context(in_cloth)?;
