@@ -901,3 +901,68 @@ fn penetrating_and_crossing_shot_names_the_places() {
     assert_eq!(summary(&parts)["failures"], *failures);
     assert_eq!(String::from_utf8_lossy(&out.stderr), stderr);
 }
+
+#[test]
+fn a_diverging_shot_stops_at_its_frame_with_the_frames_before_it_written() {
+    // A hundred g on a sheet with almost no stiffness and no strain limit: an edge passes ten
+    // times its rest length in frame 4. The run stops there naming the frame, frames 0–3 are
+    // written with their checkpoint, frame 4 is not, whether the frames are written on the
+    // simulating thread (one thread) or on one of their own (two).
+    let dir = scratch("simulate_cli_diverging");
+    let scene = shot(
+        &dir,
+        &[
+            ("substeps = 4", "substeps = 4\ngravity = [0, -1000, 0]"),
+            (
+                "material = \"cotton\"\ndensity = 0.2",
+                "material = \"silk\"\nstretch = 1.0\ncompression = 0.1\nshear = 1.0\n\
+                 strain_limit = 0",
+            ),
+        ],
+    );
+    let scene = scene.to_str().unwrap();
+    let mut written = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.join(format!("threads_{threads}"));
+        let out = out.to_str().unwrap();
+        for resume in [false, true] {
+            let mut args = vec![scene, "--out", out, "--threads", threads, "--quiet"];
+            if resume {
+                args.push("--resume");
+            }
+            let run = tailor(&args);
+            let stderr = String::from_utf8_lossy(&run.stderr);
+            assert_eq!(run.status.code(), Some(1), "{stderr}");
+            assert!(
+                stderr.contains("frame 4: the simulation diverged"),
+                "{threads} thread(s), resumed {resume}: {stderr}"
+            );
+        }
+        let files = objs(Path::new(out));
+        let names: Vec<&str> = files.keys().map(String::as_str).collect();
+        assert_eq!(
+            names,
+            [
+                "body_0000.obj",
+                "body_0001.obj",
+                "body_0002.obj",
+                "body_0003.obj",
+                "cloth_0000.obj",
+                "cloth_0001.obj",
+                "cloth_0002.obj",
+                "cloth_0003.obj",
+                "cloth_control_0000.obj",
+                "cloth_control_0001.obj",
+                "cloth_control_0002.obj",
+                "cloth_control_0003.obj",
+            ],
+            "{threads} thread(s)"
+        );
+        assert!(Path::new(out).join("tailor_checkpoint.bin").exists());
+        written.push(files);
+    }
+    assert!(
+        written[0] == written[1],
+        "--threads 1 and 2 wrote different bytes"
+    );
+}

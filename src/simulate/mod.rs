@@ -26,7 +26,11 @@
 //! written, with its checkpoint, exit status 130 ([`crate::interrupt`]).
 //!
 //! Work runs on a rayon pool of `--threads` threads; every parallel loop in the crates reduces
-//! in a fixed order, so the bytes written do not depend on the count.
+//! in a fixed order, so the bytes written do not depend on the count. With two threads or more,
+//! checking, writing and checkpointing a frame ([`Output`]) run on one more thread while the
+//! next frame simulates: they took a third of the 64² drape's run, on a core the simulation's
+//! serial passes leave idle much of the time. A failure on either side stops the run after
+//! the frames simulated before it are written, so a checkpoint is never ahead of its files.
 
 mod attach;
 mod outputs;
@@ -37,14 +41,16 @@ mod surface;
 use std::fs;
 use std::io::IsTerminal;
 use std::num::NonZeroUsize;
+use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::str::FromStr;
+use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use tailor_cloth::{Model, Motion, Settings, Simulator, State};
+use tailor_cloth::{ContactState, Model, Motion, Settings, Simulator, State};
 use tailor_subdiv::Mesh;
 
 use crate::checkpoint::{self, Checkpoint, FrameStats};
@@ -85,7 +91,9 @@ pub struct Args {
     /// scene's `frames`). Frames before A are simulated but not written.
     #[arg(long, value_name = "A..B")]
     pub frames: Option<FrameRange>,
-    /// Worker threads (default: one per core). The output is the same for any count.
+    /// Worker threads of the simulation (default: one per core); with two or more, one more
+    /// thread checks and writes each frame while the next simulates. The output is the same
+    /// for any count.
     #[arg(long, value_name = "N")]
     pub threads: Option<NonZeroUsize>,
     /// Continue from the checkpoint in the output directory (from the start if there is
@@ -189,7 +197,9 @@ fn simulate(args: &Args) -> Result<Outcome> {
     let first = range.start.unwrap_or(0);
     let last = range.end.unwrap_or(scene.frames);
     let dir = args.out.clone().unwrap_or_else(|| scene.output.dir.clone());
-    let mut shot = Shot::new(&scene)?;
+    let out = &scene.output;
+    let cloth = Surface::new(&scene.cloth.doc.mesh, out.level, out.limit_normals)?;
+    let mut shot = Shot::new(&scene, &cloth)?;
     let vertex_count = scene.cloth.doc.mesh.vertex_count();
     let resumed = if args.resume {
         checkpoint::load(&dir, &scene.fingerprint, vertex_count)?
@@ -202,7 +212,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
             dir.display()
         );
     }
-    let (mut state, mut stats, next) = match resumed {
+    let (mut state, stats, next) = match resumed {
         Some(c) => {
             shot.simulator.restore_contact_state(&c.contacts)?;
             (c.state, c.stats, c.frame + 1)
@@ -242,58 +252,73 @@ fn simulate(args: &Args) -> Result<Outcome> {
         u64::from(last.saturating_sub(next) + 1),
         args.quiet || next > last,
     );
-    for frame in next..=last {
-        let start = Instant::now();
-        let mut row = FrameStats {
-            frame,
-            ..FrameStats::default()
-        };
-        if frame > 0 {
-            shot.step(&mut state, frame, &mut row)
-                .with_context(|| format!("simulating frame {frame} of {}", scene.path.display()))?;
-        }
-        row.ms = start.elapsed().as_secs_f64() * 1e3;
-        shot.finish(&state, &mut row)?;
-        if frame >= first {
-            shot.write(&dir, frame, &state)?;
-        }
-        stats.push(row);
-        checkpoint::save(
-            &dir,
-            &Checkpoint {
-                fingerprint: scene.fingerprint.clone(),
-                frame,
-                state: state.clone(),
-                contacts: shot.simulator.contact_state().clone(),
-                stats: stats.clone(),
-            },
-        )?;
-        progress.set_message(format!(
-            "{:.0} ms/frame",
-            start.elapsed().as_secs_f64() * 1e3
-        ));
-        progress.inc(1);
-        let interrupted = interrupt::requested();
-        if interrupted || args.stop_after == Some(frame) {
-            progress.abandon();
-            if interrupted {
-                eprintln!("interrupted after frame {frame} and its checkpoint; --resume continues");
-            } else if !args.quiet {
-                eprintln!("stopped after frame {frame}, as asked");
-            }
-            return Ok(Outcome {
-                dir,
-                rejected: false,
-                interrupted,
+    let mut output = Output::new(&scene, &dir, first, stats, cloth)?;
+    // Checking and writing a frame overlap the simulation of the next on a thread of their
+    // own, when the pool has threads to spare for it.
+    let (simulated, output) = if rayon::current_num_threads() > 1 {
+        std::thread::scope(|scope| {
+            let (frames, received) = mpsc::sync_channel::<Simulated>(1);
+            let writer = scope.spawn(move || {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(1)
+                    .build()
+                    .context("starting the output thread")?;
+                pool.install(|| {
+                    for done in received {
+                        output.frame(done)?;
+                    }
+                    Ok(output)
+                })
             });
+            let simulated = run_frames(
+                &mut shot,
+                &mut state,
+                next..=last,
+                args,
+                &progress,
+                |done| frames.send(done).is_ok(),
+            );
+            drop(frames);
+            let output = writer
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            (simulated, output)
+        })
+    } else {
+        let mut failed = None;
+        let simulated = run_frames(
+            &mut shot,
+            &mut state,
+            next..=last,
+            args,
+            &progress,
+            |done| output.frame(done).map_err(|err| failed = Some(err)).is_ok(),
+        );
+        (simulated, failed.map_or(Ok(output), Err))
+    };
+    // The frames simulated are written (and checkpointed) before any error is told.
+    let output = output?;
+    if let Some(frame) = simulated? {
+        progress.abandon();
+        let interrupted = interrupt::requested();
+        if interrupted {
+            eprintln!("interrupted after frame {frame} and its checkpoint; --resume continues");
+        } else if !args.quiet {
+            eprintln!("stopped after frame {frame}, as asked");
         }
+        return Ok(Outcome {
+            dir,
+            rejected: false,
+            interrupted,
+        });
     }
+    let stats = output.stats;
     progress.finish_and_clear();
     let failures = quality::assess(
         &stats,
         scene.cloth.strain_limit,
         &scene.cloth.doc,
-        &shot.cloth,
+        &output.cloth,
     );
     let summary = summary::report(&scene.path, &dir, scene.cloth.thickness, &stats, &failures)?;
     for failure in &failures {
@@ -327,6 +352,58 @@ fn simulate(args: &Args) -> Result<Outcome> {
     })
 }
 
+/// A frame the simulation finished, for the output: its figures so far, the state and what
+/// friction carries after it.
+struct Simulated {
+    row: FrameStats,
+    state: State,
+    contacts: ContactState,
+}
+
+/// Simulates `frames`, handing each to `deliver` (which says whether the output still takes
+/// frames). Returns the frame after which an interrupt or `--stop-after` stopped the run, or
+/// `None` when every frame was simulated or the output stopped taking them.
+fn run_frames(
+    shot: &mut Shot,
+    state: &mut State,
+    frames: RangeInclusive<u32>,
+    args: &Args,
+    progress: &ProgressBar,
+    mut deliver: impl FnMut(Simulated) -> bool,
+) -> Result<Option<u32>> {
+    for frame in frames {
+        let start = Instant::now();
+        let mut row = FrameStats {
+            frame,
+            ..FrameStats::default()
+        };
+        if frame > 0 {
+            shot.step(state, frame, &mut row).with_context(|| {
+                format!("simulating frame {frame} of {}", shot.scene.path.display())
+            })?;
+        }
+        row.ms = start.elapsed().as_secs_f64() * 1e3;
+        shot.measure(state, &mut row)?;
+        let done = Simulated {
+            row,
+            state: state.clone(),
+            contacts: shot.simulator.contact_state().clone(),
+        };
+        if !deliver(done) {
+            return Ok(None);
+        }
+        progress.set_message(format!(
+            "{:.0} ms/frame",
+            start.elapsed().as_secs_f64() * 1e3
+        ));
+        progress.inc(1);
+        if interrupt::requested() || args.stop_after == Some(frame) {
+            return Ok(Some(frame));
+        }
+    }
+    Ok(None)
+}
+
 /// A progress bar on standard error with frame, ms/frame and ETA; hidden when standard error
 /// is not a terminal or when asked.
 fn progress_bar(frames: u64, hidden: bool) -> ProgressBar {
@@ -355,16 +432,14 @@ struct BodyTrack {
 struct Shot<'a> {
     scene: &'a Scene,
     simulator: Simulator,
-    /// The garment's control mesh, its positions replaced each frame for writing.
-    control: Mesh,
-    cloth: Surface,
     body: Option<BodyTrack>,
     /// Seconds per frame.
     dt: f64,
 }
 
 impl<'a> Shot<'a> {
-    fn new(scene: &'a Scene) -> Result<Self> {
+    /// The shot of `scene`, whose garment writes `cloth`.
+    fn new(scene: &'a Scene, cloth: &Surface) -> Result<Self> {
         let c = &scene.cloth;
         let in_cloth = || format!("building the cloth model of {}", c.path.display());
         let mut model = Model::new(&c.doc.mesh, &c.material).with_context(in_cloth)?;
@@ -387,8 +462,6 @@ impl<'a> Shot<'a> {
         simulator
             .pin(&c.pins, Motion::Fixed)
             .with_context(in_cloth)?;
-        let out = &scene.output;
-        let cloth = Surface::new(&c.doc.mesh, out.level, out.limit_normals)?;
         // The written faces at every level, the control mesh's own at level 0: the lift moves
         // control points after the garment's self tests, and only the written surface's
         // self tests, alternating with the lift, keep what is written clear.
@@ -417,8 +490,6 @@ impl<'a> Shot<'a> {
         Ok(Self {
             scene,
             simulator,
-            control: c.doc.mesh.clone(),
-            cloth,
             body,
             dt: 1.0 / scene.fps,
         })
@@ -452,8 +523,8 @@ impl<'a> Shot<'a> {
         Ok(())
     }
 
-    /// Evaluates the frame's surface and the figures of `tailor check`'s test.
-    fn finish(&mut self, state: &State, row: &mut FrameStats) -> Result<()> {
+    /// The frame's worst edge; an error when the simulation diverged.
+    fn measure(&self, state: &State, row: &mut FrameStats) -> Result<()> {
         let worst = self.simulator.model().worst_edge(&state.positions);
         (row.strained_edge, row.max_strain) = worst.unwrap_or_default();
         if row.max_strain.is_nan() || row.max_strain > MAX_STRAIN {
@@ -464,21 +535,87 @@ impl<'a> Shot<'a> {
                 row.max_strain * 100.0
             );
         }
+        Ok(())
+    }
+}
+
+/// What is checked and written of each frame, with the figures of every frame so far.
+struct Output<'a> {
+    scene: &'a Scene,
+    dir: &'a Path,
+    /// The first frame written.
+    first: u32,
+    /// The garment's control mesh, its positions replaced each frame for writing.
+    control: Mesh,
+    cloth: Surface,
+    /// The refined body, posed at each frame for the check.
+    body: Option<Surface>,
+    stats: Vec<FrameStats>,
+}
+
+impl<'a> Output<'a> {
+    fn new(
+        scene: &'a Scene,
+        dir: &'a Path,
+        first: u32,
+        stats: Vec<FrameStats>,
+        cloth: Surface,
+    ) -> Result<Self> {
+        let body = match &scene.body {
+            Some(b) => Some(Surface::new(&b.rest, b.level, false)?),
+            None => None,
+        };
+        Ok(Self {
+            scene,
+            dir,
+            first,
+            control: scene.cloth.doc.mesh.clone(),
+            cloth,
+            body,
+            stats,
+        })
+    }
+
+    /// Checks a simulated frame, writes its files and then its checkpoint.
+    fn frame(&mut self, done: Simulated) -> Result<()> {
+        let Simulated {
+            mut row,
+            state,
+            contacts,
+        } = done;
+        let frame = row.frame;
         let refined = self.cloth.refine(&state.positions);
         self.cloth.set(&refined)?;
+        if let (Some(surface), Some(body)) = (&mut self.body, &self.scene.body) {
+            let posed = surface.refine(body.control(frame));
+            surface.set(&posed)?;
+        }
         row.findings = crate::check::inspect(
             self.cloth.hierarchy(),
             self.cloth.mesh().positions(),
-            self.body.as_ref().map(|b| b.surface.hierarchy()),
+            self.body.as_ref().map(Surface::hierarchy),
             self.scene.cloth.thickness,
         )
-        .with_context(|| format!("checking frame {}", row.frame))?;
-        Ok(())
+        .with_context(|| format!("checking frame {frame}"))?;
+        if frame >= self.first {
+            self.write(frame, &state)?;
+        }
+        self.stats.push(row);
+        checkpoint::save(
+            self.dir,
+            &Checkpoint {
+                fingerprint: self.scene.fingerprint.clone(),
+                frame,
+                state,
+                contacts,
+                stats: self.stats.clone(),
+            },
+        )
     }
 
     /// Writes frame `frame`'s files into `dir`.
-    fn write(&mut self, dir: &Path, frame: u32, state: &State) -> Result<()> {
-        let name = |prefix: &str| dir.join(format!("{prefix}_{frame:04}.obj"));
+    fn write(&mut self, frame: u32, state: &State) -> Result<()> {
+        let name = |prefix: &str| self.dir.join(format!("{prefix}_{frame:04}.obj"));
         let out = &self.scene.output;
         if out.control_mesh {
             self.control.set_positions(&state.positions)?;
@@ -490,11 +627,9 @@ impl<'a> Shot<'a> {
         self.cloth
             .write(&name("cloth"), &state.positions, out.precision)?;
         if out.body
-            && let (Some(track), Some(body)) = (&self.body, &self.scene.body)
+            && let (Some(surface), Some(body)) = (&self.body, &self.scene.body)
         {
-            track
-                .surface
-                .write(&name("body"), body.control(frame), out.precision)?;
+            surface.write(&name("body"), body.control(frame), out.precision)?;
         }
         Ok(())
     }
