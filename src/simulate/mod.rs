@@ -253,6 +253,9 @@ fn simulate(args: &Args) -> Result<Outcome> {
         args.quiet || next > last,
     );
     let mut output = Output::new(&scene, &dir, first, stats, cloth)?;
+    let mut simulate = |deliver: &mut dyn FnMut(Simulated) -> bool| {
+        run_frames(&mut shot, &mut state, next..=last, args, &progress, deliver)
+    };
     // Checking and writing a frame overlap the simulation of the next on a thread of their
     // own, when the pool has threads to spare for it.
     let (simulated, output) = if rayon::current_num_threads() > 1 {
@@ -270,14 +273,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
                     Ok(output)
                 })
             });
-            let simulated = run_frames(
-                &mut shot,
-                &mut state,
-                next..=last,
-                args,
-                &progress,
-                |done| frames.send(done).is_ok(),
-            );
+            let simulated = simulate(&mut |done| frames.send(done).is_ok());
             drop(frames);
             let output = writer
                 .join()
@@ -286,14 +282,8 @@ fn simulate(args: &Args) -> Result<Outcome> {
         })
     } else {
         let mut failed = None;
-        let simulated = run_frames(
-            &mut shot,
-            &mut state,
-            next..=last,
-            args,
-            &progress,
-            |done| output.frame(done).map_err(|err| failed = Some(err)).is_ok(),
-        );
+        let simulated =
+            simulate(&mut |done| output.frame(done).map_err(|err| failed = Some(err)).is_ok());
         (simulated, failed.map_or(Ok(output), Err))
     };
     // The frames simulated are written (and checkpointed) before any error is told.
@@ -369,7 +359,7 @@ fn run_frames(
     frames: RangeInclusive<u32>,
     args: &Args,
     progress: &ProgressBar,
-    mut deliver: impl FnMut(Simulated) -> bool,
+    deliver: &mut dyn FnMut(Simulated) -> bool,
 ) -> Result<Option<u32>> {
     for frame in frames {
         let start = Instant::now();
