@@ -98,6 +98,56 @@ impl Hierarchy {
 
     /// [`Hierarchy::self_impacts`] into `out`, reusing its lists from step to step.
     pub fn self_impacts_into(&self, out: &mut Impacts) {
+        out.refill(self.self_pairs_impacts(None));
+    }
+
+    /// [`Hierarchy::self_impacts_into`] once more, after a query that left its answers in
+    /// `out`, when the swept refit since kept every start position and changed only the end
+    /// positions of the vertices `moved` flags. The leaf pairs without a moved vertex are not
+    /// traversed, and each feature pair without one keeps its answer, which the same straight
+    /// paths cannot change; so `out` ends with the lists the full query gives, the same bits,
+    /// at a cost that follows what moved. Rounds of impulses after the first move a few
+    /// vertices each, and ask again of the whole mesh.
+    ///
+    /// # Panics
+    /// If `moved` has fewer entries than the mesh has vertices.
+    pub fn self_impacts_again(&self, moved: &[bool], out: &mut Impacts) {
+        let topology = &self.topology;
+        let faces = self.face_count();
+        let mut dirty = vec![false; faces + self.children.len()];
+        for (f, d) in dirty[..faces].iter_mut().enumerate() {
+            let (lo, hi) = (topology.face_offsets[f], topology.face_offsets[f + 1]);
+            *d = topology.face_vertices[lo as usize..hi as usize]
+                .iter()
+                .any(|&v| moved[v as usize]);
+        }
+        for (i, [a, b]) in self.children.iter().enumerate() {
+            dirty[faces + i] = dirty[*a as usize] || dirty[*b as usize];
+        }
+        let still = |v: &u32| !moved[*v as usize];
+        let triangles = &topology.triangles;
+        let unmoved = |found: &Found| match found {
+            Found::VertexTriangle(i) | Found::TriangleVertex(i) => {
+                still(&i.vertex) && triangles[i.triangle as usize].iter().all(still)
+            }
+            Found::EdgeEdge(i) => i.edges.iter().flatten().all(still),
+        };
+        let mut found = self.self_pairs_impacts(Some(&dirty));
+        found.retain(|f| !unmoved(f));
+        let kept = (out
+            .vertex_triangle
+            .iter()
+            .copied()
+            .map(Found::VertexTriangle))
+        .chain(out.edge_edge.iter().copied().map(Found::EdgeEdge))
+        .filter(unmoved);
+        found.extend(kept);
+        out.refill(found);
+    }
+
+    /// The self impacts of the leaf pairs a self walk visits (all, or with `dirty` those with a
+    /// node that moved).
+    fn self_pairs_impacts(&self, dirty: Option<&[bool]>) -> Vec<Found> {
         let cones = NormalCones::new(self);
         let visit = |a: u32, b: u32, out: &mut Vec<Found>| {
             let (f, g) = (a.min(b), a.max(b));
@@ -107,7 +157,7 @@ impl Hierarchy {
             }
             edges_against_edges(self, f, self, g, true, out);
         };
-        out.refill(self_pairs(self, Some(&cones), true, 0.0, &visit));
+        self_pairs(self, Some(&cones), true, 0.0, dirty, &visit)
     }
 
     /// Every vertex–triangle and edge–edge contact between this mesh and `other` during the

@@ -78,7 +78,7 @@ impl Hierarchy {
             }
         };
         out.clear();
-        out.append(&mut self_pairs(self, None, true, distance, &visit));
+        out.append(&mut self_pairs(self, None, true, distance, None, &visit));
         out.sort_unstable_by_key(|p| p.edges);
         Ok(())
     }

@@ -32,7 +32,7 @@ impl Hierarchy {
                 out.push([f, g]);
             }
         };
-        let mut pairs = self_pairs(self, Some(&cones), false, 0.0, &visit);
+        let mut pairs = self_pairs(self, Some(&cones), false, 0.0, None, &visit);
         pairs.sort_unstable();
         pairs
     }

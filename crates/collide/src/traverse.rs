@@ -25,6 +25,7 @@ pub(crate) fn self_pairs<T: Send, V>(
     cones: Option<&NormalCones>,
     same_leaf: bool,
     pad: f64,
+    dirty: Option<&[bool]>,
     visit: &V,
 ) -> Vec<T>
 where
@@ -35,6 +36,7 @@ where
         ha: h,
         hb: h,
         pad,
+        dirty,
         visit,
     };
     SelfWalk {
@@ -56,6 +58,7 @@ where
         ha: a,
         hb: b,
         pad: 0.0,
+        dirty: None,
         visit,
     };
     walk.cross(root(a), root(b), &mut out);
@@ -100,7 +103,20 @@ struct Walk<'a, V> {
     ha: &'a Hierarchy,
     hb: &'a Hierarchy,
     pad: f64,
+    /// Per node of a self walk, whether a vertex below it moved: pairs of nodes where none did
+    /// are not visited.
+    dirty: Option<&'a [bool]>,
     visit: &'a V,
+}
+
+/// The node index (face `f`, or `F + i` for record `i`) of a node reference of `h`.
+#[inline(always)]
+fn node_id(h: &Hierarchy, node: u32) -> usize {
+    if node & LEAF != 0 {
+        (node & !LEAF) as usize
+    } else {
+        h.face_count() + node as usize
+    }
 }
 
 /// The number of faces below a node reference of `h`.
@@ -130,7 +146,11 @@ impl<V: Sync> Walk<'_, V> {
         V: Fn(u32, u32, &mut Vec<T>),
     {
         let (ha, hb) = (self.ha, self.hb);
-        if !overlap(&a.1, &b.1, self.pad) {
+        if self
+            .dirty
+            .is_some_and(|d| !d[node_id(ha, a.0)] && !d[node_id(hb, b.0)])
+            || !overlap(&a.1, &b.1, self.pad)
+        {
             return;
         }
         let (size_a, size_b) = (size(ha, a.0), size(hb, b.0));
@@ -172,17 +192,17 @@ impl<V: Sync> SelfWalk<'_, V> {
         V: Fn(u32, u32, &mut Vec<T>),
     {
         let h = self.walk.ha;
-        let id = if node & LEAF != 0 {
-            node & !LEAF
-        } else {
-            h.face_count() as u32 + node
-        };
-        if self.cones.is_some_and(|c| c.cannot_self_collide(h, id)) {
+        let id = node_id(h, node);
+        if self.walk.dirty.is_some_and(|d| !d[id])
+            || self
+                .cones
+                .is_some_and(|c| c.cannot_self_collide(h, id as u32))
+        {
             return;
         }
         let Some([a, b]) = children(h, node) else {
             if self.same_leaf {
-                (self.walk.visit)(id, id, out);
+                (self.walk.visit)(id as u32, id as u32, out);
             }
             return;
         };

@@ -445,6 +445,46 @@ fn random_folds_and_coils_match_brute_force() {
     );
 }
 
+/// The rounds after a query: some vertices' end positions move (none, a few, a patch, all),
+/// and asking again for what moved gives the same lists as the whole query, which brute force
+/// confirms.
+#[test]
+fn self_impacts_asked_again_for_what_moved_match_the_whole_query() {
+    let mut rng = Rng::new(29);
+    let flat = common::sheet(12, |_, _| 0.0);
+    let n = flat.positions.len();
+    let mut changed = 0;
+    for case in 0..12 {
+        let fold = Fold::random(&mut rng);
+        let later = fold.later(0.1 + 0.3 * rng.unit(), 0.5 * rng.unit());
+        let start = flat.mapped(|p| fold.apply(p));
+        let end = flat.mapped(|p| later.apply(p));
+        let mut h = build(&flat);
+        h.refit_swept(&start, &end, 0.0).unwrap();
+        let mut impacts = h.self_impacts();
+        let share = [0.0, 0.02, 0.2, 1.0][case % 4];
+        let moved: Vec<bool> = (0..n).map(|_| rng.unit() < share).collect();
+        let again: Vec<Point> = end
+            .iter()
+            .zip(&moved)
+            .map(|(p, &m)| if m { p + rng.point(0.1).coords } else { *p })
+            .collect();
+        h.refit_swept(&start, &again, 0.0).unwrap();
+        let whole = h.self_impacts();
+        changed += usize::from(whole != impacts);
+        h.self_impacts_again(&moved, &mut impacts);
+        assert_eq!(impacts, whole, "case {case}: {fold:?}, {share} moved");
+        let want = brute_self_impacts(&flat, &start, &again);
+        let got = self_impact_keys(&h);
+        assert_same(&got.0, &want.0, &format!("case {case}"));
+        assert_same(&got.1, &want.1, &format!("case {case}"));
+    }
+    assert!(
+        changed >= 6,
+        "the moves must change the answers: {changed} of the 9 that move did"
+    );
+}
+
 #[test]
 fn impacts_between_meshes_match_brute_force() {
     let body = sphere(6, 10, 0.5);

@@ -24,10 +24,10 @@
 //! surface is free of crossings on every frame the simulation writes, from a rest shape free of
 //! them.
 
-use tailor_collide::{CollideError, Hierarchy, Impacts};
+use tailor_collide::{CollideError, Hierarchy};
 use tailor_subdiv::{Point, StencilTable};
 
-use super::self_collision::{Pair, SEPARATION, ZONE_ROUNDS, Zones};
+use super::self_collision::{Pair, SEPARATION, SelfImpacts, ZONE_ROUNDS, Zones};
 use crate::substep::Substep;
 
 /// The refined surface's hierarchy, its positions at the start and end of the substep, and the
@@ -37,7 +37,7 @@ pub(super) struct SurfaceLayers {
     hierarchy: Hierarchy,
     start: Vec<Point>,
     end: Vec<Point>,
-    impacts: Impacts,
+    impacts: SelfImpacts,
     /// The control points an impulse round changed.
     touched: Vec<bool>,
     /// One impact's control points and weights, and the terms they are summed from.
@@ -62,7 +62,7 @@ impl SurfaceLayers {
             hierarchy,
             end: start.clone(),
             start,
-            impacts: Impacts::default(),
+            impacts: SelfImpacts::default(),
             touched: vec![false; rest.len()],
             vertices: Vec::new(),
             alpha: Vec::new(),
@@ -79,9 +79,8 @@ impl SurfaceLayers {
     /// whether there is any.
     fn query(&mut self, stencils: &StencilTable, x: &[Point]) -> Result<bool, CollideError> {
         stencils.apply(x, &mut self.end);
-        self.hierarchy.refit_swept(&self.start, &self.end, 0.0)?;
-        self.hierarchy.self_impacts_into(&mut self.impacts);
-        Ok(!(self.impacts.vertex_triangle.is_empty() && self.impacts.edge_edge.is_empty()))
+        self.impacts
+            .query(&mut self.hierarchy, &self.start, &self.end)
     }
 
     /// One round of impulses, as [`super::self_collision::impulse_round`] on the control
@@ -108,7 +107,7 @@ impl SurfaceLayers {
         } = self;
         touched.fill(false);
         let mut handled = 0;
-        for pair in Pair::list(hierarchy, impacts) {
+        for pair in Pair::list(hierarchy, &impacts.impacts) {
             let Some((normal, gap)) = pair.normal_and_gap(start, end) else {
                 continue;
             };
@@ -138,7 +137,7 @@ impl SurfaceLayers {
                 break;
             }
             let before = zones.merged;
-            for pair in Pair::list(&self.hierarchy, &self.impacts) {
+            for pair in Pair::list(&self.hierarchy, &self.impacts.impacts) {
                 // Every control point of the four stencils, even one whose weights cancel in
                 // the pair's β: each refined point must translate with the zone.
                 self.vertices.clear();
