@@ -53,6 +53,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use tailor_cloth::{ContactState, Model, Motion, Settings, Simulator, State};
 use tailor_subdiv::Mesh;
 
+use crate::check::Clearances;
 use crate::checkpoint::{self, Checkpoint, FrameStats};
 use crate::interrupt;
 use crate::output::{self, write_atomically};
@@ -540,6 +541,8 @@ struct Output<'a> {
     cloth: Surface,
     /// The refined body, posed at each frame for the check.
     body: Option<Surface>,
+    /// The check's clearances of the frame before.
+    clearances: Clearances,
     stats: Vec<FrameStats>,
 }
 
@@ -562,6 +565,7 @@ impl<'a> Output<'a> {
             control: scene.cloth.doc.mesh.clone(),
             cloth,
             body,
+            clearances: Clearances::default(),
             stats,
         })
     }
@@ -583,8 +587,11 @@ impl<'a> Output<'a> {
         row.findings = crate::check::inspect(
             self.cloth.hierarchy(),
             self.cloth.mesh().positions(),
-            self.body.as_ref().map(Surface::hierarchy),
+            self.body
+                .as_ref()
+                .map(|b| (b.hierarchy(), b.mesh().positions())),
             self.scene.cloth.thickness,
+            &mut self.clearances,
         )
         .with_context(|| format!("checking frame {frame}"))?;
         if frame >= self.first {
