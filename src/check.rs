@@ -270,8 +270,6 @@ fn frames(args: &Args) -> Result<Vec<(u32, PathBuf, Option<PathBuf>)>> {
         .collect())
 }
 
-/// For each cloth vertex, its signed distance to a closed body (negative inside) or, for an
-/// open body, its distance when closer than `thickness` (infinite otherwise).
 /// The body's clearance of the cloth's vertices at the last frame measured, so that the next
 /// frame measures again only the vertices that may have come within the thickness. A signed
 /// distance changes by at most how far its point moved (it is 1-Lipschitz) plus how far the

@@ -51,7 +51,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use tailor_cloth::{ContactState, Model, Motion, Settings, Simulator, State};
-use tailor_subdiv::Mesh;
+use tailor_subdiv::{Mesh, Point};
 
 use crate::check::Clearances;
 use crate::checkpoint::{self, Checkpoint, FrameStats};
@@ -247,7 +247,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
     }
     interrupt::watch()?;
     if next > 0 {
-        shot.pose_body(next - 1)?;
+        shot.pose_body(next - 1);
     }
     let progress = progress_bar(
         u64::from(last.saturating_sub(next) + 1),
@@ -344,11 +344,13 @@ fn simulate(args: &Args) -> Result<Outcome> {
 }
 
 /// A frame the simulation finished, for the output: its figures so far, the state and what
-/// friction carries after it.
+/// friction carries after it, and where the body is.
 struct Simulated {
     row: FrameStats,
     state: State,
     contacts: ContactState,
+    /// The refined body at the frame.
+    body: Option<Vec<Point>>,
 }
 
 /// Simulates `frames`, handing each to `deliver` (which says whether the output still takes
@@ -379,6 +381,7 @@ fn run_frames(
             row,
             state: state.clone(),
             contacts: shot.simulator.contact_state().clone(),
+            body: shot.body.as_ref().map(|track| track.posed.clone()),
         };
         if !deliver(done) {
             return Ok(None);
@@ -413,10 +416,13 @@ fn progress_bar(frames: u64, hidden: bool) -> ProgressBar {
     bar
 }
 
-/// The animated body as the simulation sees it.
+/// The animated body as the simulation sees it: its refined surface (built at rest, for the
+/// refinement and the attachments' bindings) and where that surface is at the last frame
+/// stepped to. The output checks against its own copy, refit at the frame it writes.
 struct BodyTrack {
     surface: Surface,
     bindings: Bindings,
+    posed: Vec<Point>,
 }
 
 /// Everything built once for a shot.
@@ -474,7 +480,12 @@ impl<'a> Shot<'a> {
                 simulator
                     .set_obstacle(rest.positions(), rest.face_offsets(), rest.face_vertices())
                     .context("making the refined body the obstacle")?;
-                Some(BodyTrack { surface, bindings })
+                let posed = rest.positions().to_vec();
+                Some(BodyTrack {
+                    surface,
+                    bindings,
+                    posed,
+                })
             }
             None => None,
         };
@@ -487,26 +498,24 @@ impl<'a> Shot<'a> {
     }
 
     /// Puts the body at simulation frame `frame` (when resuming).
-    fn pose_body(&mut self, frame: u32) -> Result<()> {
+    fn pose_body(&mut self, frame: u32) {
         if let (Some(track), Some(body)) = (&mut self.body, &self.scene.body) {
-            let refined = track.surface.refine(body.control(frame));
-            track.surface.set(&refined)?;
+            track.posed = track.surface.refine(body.control(frame));
         }
-        Ok(())
     }
 
     /// Steps from the end of frame `frame − 1` to the end of `frame`.
     fn step(&mut self, state: &mut State, frame: u32, row: &mut FrameStats) -> Result<()> {
         if let (Some(track), Some(body)) = (&mut self.body, &self.scene.body) {
             let end = track.surface.refine(body.control(frame));
-            let start = track.surface.mesh().positions();
+            let start = &track.posed;
             let targets = track.bindings.targets(start, &end, self.dt);
             self.simulator
                 .set_attachment_targets(state.time, &targets)?;
             let t0 = state.time;
             self.simulator
                 .set_obstacle_motion(t0, start, t0 + self.dt, &end)?;
-            track.surface.set(&end)?;
+            track.posed = end;
         }
         let report = self.simulator.step(state, self.dt)?;
         row.substeps = report.substeps;
@@ -539,7 +548,7 @@ struct Output<'a> {
     /// The garment's control mesh, its positions replaced each frame for writing.
     control: Mesh,
     cloth: Surface,
-    /// The refined body, posed at each frame for the check.
+    /// The refined body, set at each frame's pose (from the simulation) for the check.
     body: Option<Surface>,
     /// The check's clearances of the frame before.
     clearances: Clearances,
@@ -576,12 +585,12 @@ impl<'a> Output<'a> {
             mut row,
             state,
             contacts,
+            body,
         } = done;
         let frame = row.frame;
         let refined = self.cloth.refine(&state.positions);
         self.cloth.set(&refined)?;
-        if let (Some(surface), Some(body)) = (&mut self.body, &self.scene.body) {
-            let posed = surface.refine(body.control(frame));
+        if let (Some(surface), Some(posed)) = (&mut self.body, body) {
             surface.set(&posed)?;
         }
         row.findings = crate::check::inspect(

@@ -47,6 +47,7 @@
 use tailor_collide::{CollideError, Hierarchy, Impacts, LocalFaces, Neighbours};
 use tailor_subdiv::Point;
 
+use super::same_bits;
 use crate::energy::Vec3;
 use crate::substep::Substep;
 
@@ -110,16 +111,14 @@ impl SelfImpacts {
         x0: &[Point],
         x: &[Point],
     ) -> Result<bool, CollideError> {
-        // Bitwise: a signed zero is another number to the exact tests.
-        let same = |p: &Point, q: &Point| (0..3).all(|k| p[k].to_bits() == q[k].to_bits());
         mesh.refit_swept(x0, x, 0.0)?;
         let answered = self.start.len() == x0.len()
             && self.end.len() == x.len()
-            && self.start.iter().zip(x0).all(|(p, q)| same(p, q));
+            && self.start.iter().zip(x0).all(|(p, q)| same_bits(p, q));
         if answered {
             self.moved.clear();
             self.moved
-                .extend(x.iter().zip(&self.end).map(|(p, q)| !same(p, q)));
+                .extend(x.iter().zip(&self.end).map(|(p, q)| !same_bits(p, q)));
             if self.moved.contains(&true) {
                 mesh.self_impacts_again(&self.moved, &mut self.impacts);
             }

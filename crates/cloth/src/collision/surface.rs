@@ -22,6 +22,7 @@ use tailor_collide::{Closest, CollideError, Hierarchy};
 use tailor_subdiv::{Point, StencilTable};
 
 use super::obstacle::away_from;
+use super::same_bits;
 use super::surface_layers::SurfaceLayers;
 use crate::energy::Vec3;
 use crate::substep::Substep;
@@ -176,7 +177,7 @@ impl Surface {
             self.moved.extend(
                 (0..)
                     .zip(changed)
-                    .filter(|(_, (p, q))| p != q)
+                    .filter(|(_, (p, q))| !same_bits(p, q))
                     .map(|(k, _)| k),
             );
         } else {
