@@ -21,7 +21,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use nalgebra::Point3;
 use serde_json::json;
-use tailor_collide::Hierarchy;
+use tailor_collide::{DistanceBounds, Hierarchy};
 
 use crate::output;
 use crate::polymesh_obj::{self, PolyMesh};
@@ -77,8 +77,8 @@ pub struct Findings {
     pub crossing_faces: Option<[u32; 2]>,
 }
 
-/// The findings of one frame: `cloth` and `body` refit at the frame's positions (the body's
-/// vertices given with it), `cloth_positions` the cloth's vertices; `last` holds what the
+/// The findings of one frame: `cloth` and `body` refit at the frame's positions,
+/// `cloth_positions` the cloth's vertices; `last` holds what the
 /// frame before measured of the body's clearance and takes this frame's.
 ///
 /// # Errors
@@ -86,7 +86,7 @@ pub struct Findings {
 pub fn inspect(
     cloth: &Hierarchy,
     cloth_positions: &[Point3<f64>],
-    body: Option<(&Hierarchy, &[Point3<f64>])>,
+    body: Option<&Hierarchy>,
     thickness: f64,
     last: &mut Clearances,
 ) -> Result<Findings> {
@@ -96,8 +96,8 @@ pub fn inspect(
         crossing_faces: crossing.first().copied(),
         ..Findings::default()
     };
-    if let Some((body, body_positions)) = body {
-        let clearance = last.measure(body, body_positions, cloth_positions, thickness)?;
+    if let Some(body) = body {
+        let clearance = last.measure(body, cloth_positions, thickness)?;
         for (v, &gap) in clearance.iter().enumerate() {
             if gap < thickness {
                 found.penetrating_vertices += 1;
@@ -164,12 +164,10 @@ fn check(args: &Args) -> Result<bool> {
     for (frame, cloth_path, body_path) in &frames {
         let cloth_mesh = polymesh_obj::read(cloth_path)?;
         let cloth_h = cloth.hierarchy(&cloth_mesh, cloth_path)?;
-        let mut body_positions = Vec::new();
         let body_h = match body_path {
             Some(body_path) => {
                 let body_mesh = polymesh_obj::read(body_path)?;
                 let body_h = body.hierarchy(&body_mesh, body_path)?;
-                body_positions = body_mesh.positions;
                 if !body_h.is_closed() && !warned_open {
                     eprintln!(
                         "warning: {} is not closed, so it has no inside; only cloth vertices \
@@ -186,7 +184,7 @@ fn check(args: &Args) -> Result<bool> {
         let found = inspect(
             cloth_h,
             &cloth_mesh.positions,
-            body_h.map(|h| (h, body_positions.as_slice())),
+            body_h,
             args.thickness,
             &mut clearances,
         )
@@ -271,34 +269,30 @@ fn frames(args: &Args) -> Result<Vec<(u32, PathBuf, Option<PathBuf>)>> {
 }
 
 /// The body's clearance of the cloth's vertices at the last frame measured, so that the next
-/// frame measures again only the vertices that may have come within the thickness. A signed
-/// distance changes by at most how far its point moved (it is 1-Lipschitz) plus how far the
-/// body's surface moved, which is at most the largest displacement of its vertices while its
-/// triangles stay the same; a vertex whose last clearance, less those, is still past the
-/// thickness is clear without a query, and keeps that lower bound for the frame after. The
-/// findings come from the vertices within the thickness alone, which are all measured, so
-/// they are those of measuring every vertex; in the 64² drape most of the written surface
-/// hangs clear of the sphere, and measuring it all took an eighth of the run.
+/// frame measures again only the vertices that may have come within the thickness
+/// ([`DistanceBounds`]: a signed distance changes by at most how far its point moved plus how
+/// far the body's vertices moved). The findings come from the vertices within the thickness
+/// alone, which are all measured, so they are those of measuring every vertex; in the 64²
+/// drape most of the written surface hangs clear of the sphere, and measuring it all took an
+/// eighth of the run.
 #[derive(Default)]
 pub struct Clearances {
-    cloth: Vec<Point3<f64>>,
-    body: Vec<Point3<f64>>,
-    triangles: Vec<[u32; 3]>,
-    /// Each cloth vertex's signed distance from the body, or a lower bound of it past the
+    /// Each cloth vertex's signed distance from a closed body, or a lower bound of it past the
     /// thickness.
+    bounds: DistanceBounds,
+    /// Each cloth vertex's distance from an open body within the thickness, else infinity.
     gap: Vec<f64>,
-    todo: Vec<usize>,
+    todo: Vec<u32>,
     queries: Vec<Point3<f64>>,
 }
 
 impl Clearances {
-    /// The clearance of each of `cloth` from `body` (refit at `body_positions`): the signed
-    /// distance of a closed body, exact within the thickness; for an open body, the distance
-    /// when within the thickness, else infinity.
+    /// The clearance of each of `cloth` from `body`: the signed distance of a closed body,
+    /// exact within the thickness; for an open body, the distance when within the thickness,
+    /// else infinity.
     fn measure(
         &mut self,
         body: &Hierarchy,
-        body_positions: &[Point3<f64>],
         cloth: &[Point3<f64>],
         thickness: f64,
     ) -> Result<&[f64]> {
@@ -310,54 +304,18 @@ impl Clearances {
                     .iter()
                     .map(|c| c.map_or(f64::INFINITY, |c| c.distance)),
             );
-            self.cloth.clear();
+            self.bounds.forget();
             return Ok(&self.gap);
         }
-        let comparable = self.cloth.len() == cloth.len()
-            && self.body.len() == body_positions.len()
-            && self.triangles == body.triangles();
-        self.todo.clear();
-        if comparable {
-            let moved = |a: &[Point3<f64>], b: &[Point3<f64>]| {
-                a.iter()
-                    .zip(b)
-                    .map(|(p, q)| (p - q).norm())
-                    .fold(0.0, f64::max)
-            };
-            let body_moved = moved(&self.body, body_positions);
-            // Past the thickness by more than rounding could take back.
-            let clear = thickness + 1e-9 * (1.0 + thickness);
-            for (i, (gap, (p, q))) in self
-                .gap
-                .iter_mut()
-                .zip(cloth.iter().zip(&self.cloth))
-                .enumerate()
-            {
-                let bound = *gap - (p - q).norm() - body_moved;
-                if bound >= clear {
-                    *gap = bound;
-                } else {
-                    self.todo.push(i);
-                }
-            }
-        } else {
-            self.gap.clear();
-            self.gap.resize(cloth.len(), 0.0);
-            self.todo.extend(0..cloth.len());
-            self.triangles.clear();
-            self.triangles.extend_from_slice(body.triangles());
-        }
+        self.bounds.stale(body, cloth, thickness, &mut self.todo);
         self.queries.clear();
-        self.queries.extend(self.todo.iter().map(|&i| cloth[i]));
+        self.queries
+            .extend(self.todo.iter().map(|&i| cloth[i as usize]));
         let measured = body.signed_distances(&self.queries)?;
         for (&i, d) in self.todo.iter().zip(measured) {
-            self.gap[i] = d;
+            self.bounds.set(i, d);
         }
-        self.cloth.clear();
-        self.cloth.extend_from_slice(cloth);
-        self.body.clear();
-        self.body.extend_from_slice(body_positions);
-        Ok(&self.gap)
+        Ok(self.bounds.bounds())
     }
 }
 
@@ -444,10 +402,10 @@ mod tests {
                 .iter()
                 .map(|p| Point3::new(p.x, depth - 0.2 * (p.x * p.x + p.z * p.z), p.z))
                 .collect();
-            let remembered = last.measure(&h, &body, &cloth, thickness).unwrap().to_vec();
+            let remembered = last.measure(&h, &cloth, thickness).unwrap().to_vec();
             skipped += u32::from(last.todo.len() < cloth.len());
             let fresh = Clearances::default()
-                .measure(&h, &body, &cloth, thickness)
+                .measure(&h, &cloth, thickness)
                 .unwrap()
                 .to_vec();
             for (i, (r, f)) in remembered.iter().zip(&fresh).enumerate() {

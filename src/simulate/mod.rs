@@ -596,9 +596,7 @@ impl<'a> Output<'a> {
         row.findings = crate::check::inspect(
             self.cloth.hierarchy(),
             self.cloth.mesh().positions(),
-            self.body
-                .as_ref()
-                .map(|b| (b.hierarchy(), b.mesh().positions())),
+            self.body.as_ref().map(|b| b.hierarchy()),
             self.scene.cloth.thickness,
             &mut self.clearances,
         )

@@ -10,7 +10,8 @@
 //! - proximity ([`Hierarchy::closest_points`], [`Hierarchy::faces_within`],
 //!   [`Hierarchy::self_proximity`], [`Hierarchy::edge_proximity`]) for repulsion and for the
 //!   body's inside test ([`Hierarchy::signed_distances`]), with the faces around each vertex on
-//!   the surface ([`Hierarchy::local_faces`]) for repulsion to leave alone;
+//!   the surface ([`Hierarchy::local_faces`]) for repulsion to leave alone, and the points a
+//!   caller need not measure again as the mesh and they move ([`DistanceBounds`]);
 //! - exact triangle–triangle crossings ([`Hierarchy::self_intersections`]);
 //! - continuous collisions over a step ([`Hierarchy::self_impacts`], [`Hierarchy::impacts_with`],
 //!   and [`Hierarchy::vertex_impacts_with`] for the vertex–triangle part alone), after Bridson,
@@ -58,6 +59,7 @@ mod ccd;
 mod cones;
 mod continuous;
 mod convert;
+mod distance_bounds;
 mod edges;
 mod error;
 mod hierarchy;
@@ -72,6 +74,7 @@ mod triangle;
 
 pub use ccd::{edge_edge_impact, vertex_triangle_impact};
 pub use continuous::{EdgeEdgeImpact, Impacts, VertexTriangleImpact};
+pub use distance_bounds::DistanceBounds;
 pub use edges::{EdgeProximity, segments_closest_points};
 pub use error::CollideError;
 pub use hierarchy::Hierarchy;

@@ -12,8 +12,8 @@ use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::Triangle;
 use tailor_collide::{
-    CollideError, Hierarchy, Impacts, LocalFaces, Neighbours, Point, edge_edge_impact,
-    segments_closest_points, triangles_intersect, vertex_triangle_impact,
+    CollideError, DistanceBounds, Hierarchy, Impacts, LocalFaces, Neighbours, Point,
+    edge_edge_impact, segments_closest_points, triangles_intersect, vertex_triangle_impact,
 };
 
 fn build(m: &Mesh) -> Hierarchy {
@@ -107,6 +107,63 @@ fn closest_points_match_brute_force() {
                 );
             }
         }
+    }
+}
+
+/// Over a moving mesh and moving points, every point the bounds do not list for measuring is
+/// farther than the distance asked about (brute force), except the points that did not move
+/// over a mesh that did not move, which are never listed (their last answer holds); and the
+/// bounds spare most of the measuring.
+#[test]
+fn distance_bounds_list_every_point_that_may_have_come_near() {
+    let mut rng = Rng::new(11);
+    for (name, m) in meshes() {
+        let mut h = build(&m);
+        let mut points: Vec<Point> = (0..200).map(|_| rng.point(1.5)).collect();
+        let mut bounds = DistanceBounds::default();
+        let (near, reach) = (0.1, 0.3);
+        let (mut listed, mut asked) = (Vec::new(), 0);
+        let mut t = 0.0;
+        for step in 0..9 {
+            // Steps 1, 4, 7: the mesh holds still; from step 1 on the odd points move only
+            // every third step.
+            let mesh_still = step % 3 == 1;
+            let still = |i: usize| step % 3 != 0 && i % 2 == 1;
+            if !mesh_still {
+                t += 0.1;
+            }
+            let mesh = m.mapped(|p| {
+                let w = wave(p, t);
+                Point::new(w.x, w.y, p.z + w.z + 0.05 * t)
+            });
+            h.refit(&mesh, 0.0).unwrap();
+            for (i, p) in points.iter_mut().enumerate() {
+                if !still(i) {
+                    *p += rng.point(0.01).coords;
+                }
+            }
+            bounds.stale(&h, &points, near, &mut listed);
+            asked += listed.len();
+            for (i, p) in points.iter().enumerate() {
+                let d = all_distances(&m, &mesh, p)
+                    .iter()
+                    .map(|x| x.0)
+                    .fold(f64::INFINITY, f64::min);
+                if listed.binary_search(&(i as u32)).is_ok() {
+                    bounds.set(i as u32, d.min(reach));
+                } else if !(still(i) && mesh_still) {
+                    assert!(d > near, "{name}: step {step}, point {i} at {d} not listed");
+                }
+                if still(i) && mesh_still {
+                    assert!(!listed.contains(&(i as u32)), "{name}: {i} did not move");
+                }
+            }
+        }
+        assert!(
+            asked < 9 * points.len() / 2,
+            "{name}: {asked} of {} measured",
+            9 * points.len()
+        );
     }
 }
 

@@ -18,11 +18,10 @@
 //!
 //! Every sum runs in a fixed order, so the result does not depend on the thread count.
 
-use tailor_collide::{Closest, CollideError, Hierarchy};
+use tailor_collide::{Closest, CollideError, DistanceBounds, Hierarchy};
 use tailor_subdiv::{Point, StencilTable};
 
 use super::obstacle::away_from;
-use super::same_bits;
 use super::surface_layers::SurfaceLayers;
 use crate::energy::Vec3;
 use crate::substep::Substep;
@@ -32,6 +31,11 @@ use crate::substep::Substep;
 /// point by the mean of its requests): 8 rounds left the 13² drape's surface 0.03 mm inside
 /// the thickness under a 1% change of the CG tolerance.
 const ROUNDS: usize = 32;
+
+/// The radius, in thicknesses, within which a refined point measured again is asked for the
+/// body: a point found nothing within it skips the queries until it or the body has moved by
+/// the difference from the thickness.
+const REACH: f64 = 2.0;
 
 /// How far past the thickness a lifted refined point is aimed, relative to it, so that the
 /// distance measured afterwards is not below the thickness by rounding.
@@ -44,12 +48,12 @@ pub(crate) struct Surface {
     /// The refined faces, when the surface must not pass through itself either.
     layers: Option<SurfaceLayers>,
     points: Vec<Point>,
-    /// What the body's hierarchy answered for each refined point at the position `measured`
-    /// holds, valid within one substep ([`Self::begin_substep`]): the body's end positions do not
-    /// change within it, so a refined point that has not moved since is not measured again.
+    /// What the body's hierarchy answered for each refined point at its last measure: its
+    /// closest point within the thickness.
     closest: Vec<Option<Closest>>,
-    measured: Vec<Point>,
-    known: bool,
+    /// Lower bounds of the refined points' distances from the body, as of their positions and
+    /// the body's at the last measure.
+    bounds: DistanceBounds,
     /// The refined points to measure, and their answers.
     moved: Vec<u32>,
     queries: Vec<Point>,
@@ -68,8 +72,7 @@ impl Surface {
         Self {
             points: vec![Point::origin(); stencils.len()],
             closest: vec![None; stencils.len()],
-            measured: vec![Point::origin(); stencils.len()],
-            known: false,
+            bounds: DistanceBounds::default(),
             moved: Vec::new(),
             queries: Vec::new(),
             answers: Vec::new(),
@@ -155,43 +158,34 @@ impl Surface {
         self.layers.as_mut().map(|layers| (stencils, layers))
     }
 
-    /// A new substep from control positions `x0`: what the body answered is forgotten (its
-    /// end positions change with the substep), and the refined surface's start is taken for
-    /// its self passes.
+    /// A new substep from control positions `x0`: the refined surface's start is taken for its
+    /// self passes.
     pub fn begin_substep(&mut self, x0: &[Point]) {
-        self.known = false;
         if let Some(layers) = &mut self.layers {
             layers.begin(&self.stencils, x0);
         }
     }
 
     /// The body's closest point within `thickness` of every refined point into
-    /// [`Self::closest`]: all of them after [`Self::begin_substep`], else only those that moved since
-    /// they were measured. Each query's answer depends on its point alone (the hierarchy's
-    /// answers do not depend on which other points are asked with it, as they do not on the
-    /// thread count), so the answers are the same bits as measuring every point.
+    /// [`Self::closest`]. Only the points whose distance bound ([`DistanceBounds`]) is not past
+    /// the thickness and that moved, or that the body moved under, are measured again; they
+    /// are asked for the body within [`REACH`] thicknesses, so that the next bound is the
+    /// distance found or that radius. Each query's answer depends on its point alone (the
+    /// hierarchy's answers do not depend on the radius beyond the answer, on which other
+    /// points are asked with it, or on the thread count), so the answers are the same bits as
+    /// measuring every point within the thickness.
     fn measure(&mut self, body: &Hierarchy, thickness: f64) -> Result<(), CollideError> {
-        self.moved.clear();
-        if self.known {
-            let changed = self.points.iter().zip(&self.measured);
-            self.moved.extend(
-                (0..)
-                    .zip(changed)
-                    .filter(|(_, (p, q))| !same_bits(p, q))
-                    .map(|(k, _)| k),
-            );
-        } else {
-            self.moved.extend(0..self.points.len() as u32);
-        }
+        self.bounds
+            .stale(body, &self.points, thickness, &mut self.moved);
         self.queries.clear();
         self.queries
             .extend(self.moved.iter().map(|&k| self.points[k as usize]));
-        body.closest_points_into(&self.queries, thickness, &mut self.answers)?;
+        let reach = REACH * thickness;
+        body.closest_points_into(&self.queries, reach, &mut self.answers)?;
         for (&k, answer) in self.moved.iter().zip(&self.answers) {
-            self.closest[k as usize] = *answer;
-            self.measured[k as usize] = self.points[k as usize];
+            self.closest[k as usize] = answer.filter(|c| c.distance <= thickness);
+            self.bounds.set(k, answer.map_or(reach, |c| c.distance));
         }
-        self.known = true;
         Ok(())
     }
 
@@ -237,11 +231,11 @@ mod tests {
             .unwrap()
     }
 
-    /// Within a substep the lift measures again only the refined points that moved; a body
-    /// that moved with the next substep is measured again everywhere, and the answers are
+    /// The lift measures again only the refined points that may have come within the
+    /// thickness, over a body that moves between substeps, and its answers and its lift are
     /// those of measuring every point.
     #[test]
-    fn the_lift_measures_again_what_moved_and_everything_after_a_substep() {
+    fn the_lift_measured_again_where_needed_lifts_as_measuring_everything() {
         let (mut surface, mut x, mut body) = sheet_and_box(-0.1);
         body.refit(&body_positions(-0.1), 0.0).unwrap();
         assert_eq!(
