@@ -49,27 +49,36 @@
 //! 5. **Body impacts and the final projection** ([`Collisions::push_out`]): any vertex whose
 //!    path enters a body triangle from the front is put back on that triangle's front at the
 //!    end of the substep, however fast the body moved, and any vertex closer than half the
-//!    thickness is pushed out to it.
+//!    thickness is pushed out to it. Every later projection also seeks, within how far it
+//!    moved, a vertex the passes in between moved farther than the thickness, which may have
+//!    gone that deep into the body (see `Obstacle::project`).
 //! 6. **The refined surface** ([`Collisions::clear_surface`]), when the caller gave its
 //!    stencils: the control points are lifted until every point of the subdivided surface,
 //!    the one that renders, is at least the thickness from the body. A lift strains the edges
 //!    around the lifted points as a push does (the demo's cape went from 5% to 11% strain in
 //!    one substep), so strain limiting relaxes around every vertex steps 5 and 6 moved, and
-//!    steps 5's projection and 6 run once more after it.
+//!    step 5's projection runs once more after it; step 8 lifts again.
 //! 7. **Self impacts again** (`Response::recheck_layers`), with self-collision on and
-//!    when step 5 pushed anything: a push can fold a layer lying on the body through the one
-//!    above it (the fold scenario's lower layer: two of its faces crossed after a push
-//!    under two of three 1% changes of the CG tolerance), so step 4 runs again on the
+//!    when step 5 pushed or step 6 lifted anything: a push can fold a layer lying on the body
+//!    through the one above it (the fold scenario's lower layer: two of its faces crossed after
+//!    a push under two of three 1% changes of the CG tolerance), and the strain limiting after
+//!    a lift can pull one layer through another (the 64² drape at five substeps, the sphere
+//!    moved by 3 nm: the control mesh crossed itself on 3 frames), so step 4 runs again on the
 //!    positions steps 5 and 6 left, the vertices they moved a hundred times heavier, and the
 //!    projection once more for what that moved.
-//! 8. **The refined surface against itself** (`Layers::Surface`), with self-collision on and
-//!    when the caller gave the refined faces: the continuous self tests of step 4 run once
-//!    more on the points of the subdivided surface, their impulses and impact zones acting on
-//!    the control points through the stencils (the `collision::surface_layers` module), as in
-//!    step 7 on the positions the body passes left, then the lift of step 6 again, in rounds
-//!    until the self impacts find nothing after a lift (`Response::surface_layers`). The
-//!    control mesh can be free of crossings while the surface it defines is not: where a hem
-//!    crumples, the refined faces of two folds crossed on 12 of 61 frames of the 64² drape.
+//! 8. **Settling** (`Response::settle`): rounds of the refined surface against itself (with
+//!    self-collision on and the refined faces given: the continuous self tests of step 4 on
+//!    the points of the subdivided surface, their impulses and impact zones acting on the
+//!    control points through the stencils, the `collision::surface_layers` module, as in step
+//!    7), the lift of step 6 with strain limiting around what it lifted, and the control
+//!    mesh's own self impacts of step 7 on what those moved, until a round moves nothing, so
+//!    that all of them hold together. The control mesh can be free of crossings while the
+//!    surface it defines is not: where a hem crumples, the refined faces of two folds crossed
+//!    on 12 of 61 frames of the 64² drape. And the refined pass and the lift move control
+//!    points the control mesh's tests have not seen: without the control mesh's tests in
+//!    these rounds it ended crossed on 50 of 61 frames of the 128² drape, and at one substep a
+//!    frame the next substeps could not undo it and the 64² drape tangled (47% strain, the
+//!    written surface crossed on 47 frames).
 //!
 //! Friction acts in the integrator's own solve (step 2 only changes the velocities of
 //! contacts that start to stick; see the `simulator` module). The other passes (strain
@@ -93,9 +102,11 @@ use crate::{ClothError, Model};
 /// around them: with 6 rounds the 64² drape needed zones in its pleats and ended 13% strained).
 const IMPULSE_ROUNDS: usize = 12;
 
-/// Most rounds of the refined surface's self impacts and the lift after them (step 8); on the
-/// 128² drape at two substeps a frame the second round's self impacts found nothing.
-const SURFACE_ROUNDS: usize = 3;
+/// Most rounds of step 8 (the refined surface's self impacts, the lift and strain limiting,
+/// the control mesh's self impacts). At two substeps a frame the 64² drape needs a second round
+/// in half its substeps and a third in 3 of 120, the 128² drape a fourth once; at one substep
+/// a frame (10 cm a step) the 64² drape needs five once. None reached the last.
+const SETTLE_ROUNDS: usize = 8;
 
 /// The collision response of one simulator: the collision state, the strain limiter, and the
 /// buffers of the current substep.
@@ -192,7 +203,7 @@ impl Response {
         &mut self.collisions
     }
 
-    /// Steps 2–7 of the module docs, after the solve of the substep of length `h` from `x0`.
+    /// Steps 2–8 of the module docs, after the solve of the substep of length `h` from `x0`.
     /// `integrator` is the solve's own step (from x̂ over ĥ, to its end positions and
     /// velocities, which the response corrects); `residual` its b − A Δv, the contact
     /// impulses friction reads; `springs` the edges strain limiting keeps. Returns how many
@@ -260,9 +271,7 @@ impl Response {
         if self.collisions.has_obstacle() {
             impacts += self.body_passes(settings, springs, &mut motion)?;
         }
-        if settings.self_collision && self.collisions.has_surface_layers() {
-            impacts += self.surface_layers(settings, springs, &mut motion)?;
-        }
+        impacts += self.settle(settings, springs, &mut motion)?;
         // A vertex the passes left alone ends with the integrator's velocity; one they
         // changed (stopped by an impact, pushed, limited) with the velocity of its corrected
         // path, as backward Euler's would: the impulse that changed its path also took the
@@ -316,8 +325,8 @@ impl Response {
     }
 
     /// Steps 5–7: the body impacts and projection, the refined surface's lift, strain limiting
-    /// around what they moved, and the self impacts again. Returns how many impacts and
-    /// projections they made.
+    /// around what they moved, and the self impacts again when they moved anything. Returns
+    /// how many impacts and projections they made.
     fn body_passes(
         &mut self,
         settings: &Settings,
@@ -335,48 +344,60 @@ impl Response {
         }
         let lifted = self.collisions.clear_surface(thickness, motion)?;
         if lifted > 0 {
-            // Lifting control points strains the edges around them as much as a push
-            // (on the cape, from 5% to 11% in one substep); lift again after, so the
-            // collision passes keep the last word.
+            // Lifting control points strains the edges around them as much as a push (on the
+            // cape, from 5% to 11% in one substep); the rounds of step 8 lift again after it.
             resolved += self.relax_what_moved(settings, springs, motion)?;
-            resolved += self.collisions.clear_surface(thickness, motion)?;
         }
         resolved += lifted;
-        if settings.self_collision && pushed > 0 {
+        if settings.self_collision && pushed + lifted > 0 {
             resolved += self.recheck_layers(settings, springs, motion, Layers::Garment)?;
             resolved += self.collisions.project(thickness, motion)?;
         }
         Ok(resolved)
     }
 
-    /// Step 8: the refined surface's self impacts, as [`Self::recheck_layers`], then the lift
-    /// of step 6 once more: the self passes since the lift (step 7's and these) can bring the
-    /// refined surface back within the thickness of the body (on the 128² drape's landing, by
-    /// 1.2 mm). While the lift moves anything, the refined self impacts run again on what it
-    /// left, and the lift after them, a few rounds at most; the rounds end when the self
-    /// impacts find nothing after a lift, so both hold. Returns how many impacts and lifts
-    /// they made.
-    fn surface_layers(
+    /// Step 8: rounds of the refined surface's self impacts, as [`Self::recheck_layers`] (with
+    /// self-collision on and the refined faces given), the lift of step 6 and strain limiting
+    /// around what it lifted, and the control mesh's self impacts of step 7 on what those
+    /// moved (with self-collision on), until a round moves nothing, so all of them hold: the
+    /// self passes since the lift (step 7's and these) can bring the refined surface back
+    /// within the thickness of the body (on the 128² drape's landing, by 1.2 mm), the strain
+    /// limiting after a lift can put it back too, and the refined impulses and the lift move
+    /// control points the control mesh's tests have not seen. Returns how many impacts and
+    /// lifts they made.
+    fn settle(
         &mut self,
         settings: &Settings,
         springs: &Springs,
         motion: &mut Substep,
     ) -> Result<u32, CollideError> {
+        let surface = settings.self_collision && self.collisions.has_surface_layers();
         let mut resolved = 0;
-        for round in 0..SURFACE_ROUNDS {
-            let impacts = self.recheck_layers(settings, springs, motion, Layers::Surface)?;
-            if impacts == 0 && round > 0 {
-                break;
-            }
+        for _ in 0..SETTLE_ROUNDS {
+            let impacts = if surface {
+                self.recheck_layers(settings, springs, motion, Layers::Surface)?
+            } else {
+                0
+            };
             self.before.clear();
             self.before.extend_from_slice(motion.x);
             let lifted = self.collisions.clear_surface(settings.thickness, motion)?;
-            resolved += impacts + lifted;
-            if lifted == 0 {
+            if lifted > 0 {
+                // As after step 6: the cloth around the lifted points takes up their strain.
+                resolved += self.relax_what_moved(settings, springs, motion)?;
+            }
+            let garment = if settings.self_collision && impacts + lifted > 0 {
+                self.recheck_layers(settings, springs, motion, Layers::Garment)?
+            } else {
+                0
+            };
+            if garment > 0 {
+                resolved += self.collisions.project(settings.thickness, motion)?;
+            }
+            resolved += impacts + lifted + garment;
+            if impacts + lifted + garment == 0 {
                 break;
             }
-            // As after step 6: the cloth around the lifted points takes up their strain.
-            resolved += self.relax_what_moved(settings, springs, motion)?;
         }
         Ok(resolved)
     }
