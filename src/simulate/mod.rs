@@ -596,7 +596,7 @@ impl<'a> Output<'a> {
         row.findings = crate::check::inspect(
             self.cloth.hierarchy(),
             self.cloth.mesh().positions(),
-            self.body.as_ref().map(|b| b.hierarchy()),
+            self.body.as_ref().map(Surface::hierarchy),
             self.scene.cloth.thickness,
             &mut self.clearances,
         )

@@ -110,7 +110,9 @@ impl DistanceBounds {
     }
 }
 
-/// Whether two points have the same coordinates, bit for bit.
-fn same_bits(p: &Point, q: &Point) -> bool {
+/// Whether two points are the same bits: a query answered at one is answered at the other.
+/// Bitwise, since a signed zero is another number to the exact tests.
+#[must_use]
+pub fn same_bits(p: &Point, q: &Point) -> bool {
     (0..3).all(|k| p[k].to_bits() == q[k].to_bits())
 }

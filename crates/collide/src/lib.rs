@@ -74,7 +74,7 @@ mod triangle;
 
 pub use ccd::{edge_edge_impact, vertex_triangle_impact};
 pub use continuous::{EdgeEdgeImpact, Impacts, VertexTriangleImpact};
-pub use distance_bounds::DistanceBounds;
+pub use distance_bounds::{DistanceBounds, same_bits};
 pub use edges::{EdgeProximity, segments_closest_points};
 pub use error::CollideError;
 pub use hierarchy::Hierarchy;

@@ -36,12 +36,6 @@ use crate::settings::Settings;
 use crate::substep::{Floor, Impulses, Substep};
 use crate::{ClothError, Model};
 
-/// Whether two points are the same bits: a query answered at one is answered at the other.
-/// Bitwise, since a signed zero is another number to the exact tests.
-fn same_bits(p: &Point, q: &Point) -> bool {
-    (0..3).all(|k| p[k].to_bits() == q[k].to_bits())
-}
-
 /// Which surface the self-collision passes keep from passing through itself.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Layers {

@@ -44,10 +44,9 @@
 //! neighbours, self-collision changes no bit of the motion: the strip droops exactly as
 //! without it.
 
-use tailor_collide::{CollideError, Hierarchy, Impacts, LocalFaces, Neighbours};
+use tailor_collide::{CollideError, Hierarchy, Impacts, LocalFaces, Neighbours, same_bits};
 use tailor_subdiv::Point;
 
-use super::same_bits;
 use crate::energy::Vec3;
 use crate::substep::Substep;
 
