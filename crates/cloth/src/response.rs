@@ -106,8 +106,8 @@ const IMPULSE_ROUNDS: usize = 12;
 /// the control mesh's self impacts). At two substeps a frame the 64² drape needs a second round
 /// in half its substeps and a third in 3 of 120, the 128² drape a fourth once; at one substep
 /// a frame (10 cm a step) the 64² drape needs five once, the 128² drape up to fourteen, and
-/// with eight it left the written surface crossed from frame 20 on. A round costs only where
-/// the one before it moved something.
+/// with eight, the sphere moved by 1 nm, it left the written surface crossed on 24 frames. A
+/// round costs only where the one before it moved something.
 const SETTLE_ROUNDS: usize = 32;
 
 /// The collision response of one simulator: the collision state, the strain limiter, and the
