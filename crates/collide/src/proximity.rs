@@ -24,8 +24,8 @@
 //!
 //! A vertex of the mesh asking for the faces near it, excluding its own, climbs the same way
 //! from the face that owns it, which lies next to it and is excluded anyway. It also skips the
-//! faces around it on the surface that the caller lists ([`crate::local`]) before projecting
-//! on them.
+//! faces around it on the surface that the caller lists ([`crate::local`]), whole subtrees of
+//! them at a time, and climbs from the highest subtree around its own face that it skips.
 //!
 //! Self-proximity does not use the normal cones: they prove that a region cannot *touch*
 //! itself, not that its vertices stay farther than a distance from its other faces (a finely
@@ -64,10 +64,23 @@ pub struct Closest {
 /// For each vertex of a mesh, a sorted list of faces a self-proximity query skips: a CSR
 /// table, made by [`Hierarchy::local_faces`]. The empty table (its default) lists nothing for
 /// any vertex.
+///
+/// With the lists come, per vertex, the ranges of the depth-first face order of the hierarchy
+/// that made the table (see `local`) in which every face is skipped, so that a query on that
+/// hierarchy leaves out whole subtrees without testing their boxes; a hierarchy whose faces
+/// lie in another order reads the lists alone.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct LocalFaces {
     pub(crate) offsets: Vec<u32>,
     pub(crate) faces: Vec<u32>,
+    /// CSR over vertices: ranges `[first, end)` of places in the depth-first order.
+    pub(crate) range_offsets: Vec<u32>,
+    pub(crate) ranges: Vec<[u32; 2]>,
+    /// Per vertex, the node a query climbs from: the highest above the face that owns the
+    /// vertex whose faces lie wholly in one range.
+    pub(crate) starts: Vec<u32>,
+    /// The fingerprint of the order the ranges refer to.
+    pub(crate) order: u64,
 }
 
 impl LocalFaces {
@@ -77,6 +90,18 @@ impl LocalFaces {
         match self.offsets.get(v..v + 2) {
             Some(&[first, end]) => &self.faces[first as usize..end as usize],
             _ => &[],
+        }
+    }
+
+    /// The ranges of the depth-first order of `h` in which every face is skipped for vertex
+    /// `v`, and the node of `h` its query climbs from: none when `h` orders its faces
+    /// otherwise than the hierarchy that made the table.
+    pub(crate) fn ranges_of(&self, v: usize, h: &Hierarchy) -> Option<(&[[u32; 2]], u32)> {
+        match self.range_offsets.get(v..v + 2) {
+            Some(&[first, end]) if self.order == h.order_fingerprint() => {
+                Some((&self.ranges[first as usize..end as usize], self.starts[v]))
+            }
+            _ => None,
         }
     }
 
@@ -246,7 +271,7 @@ impl Hierarchy {
         check_queries(queries)?;
         out.fill(queries.len(), |i, stack, hits| {
             let q = to_glam(&queries[i]);
-            self.within(q, distance, None, |_| false, stack, hits);
+            self.within(q, distance, None, (&[], |_| false), stack, hits);
         });
         Ok(())
     }
@@ -278,7 +303,10 @@ impl Hierarchy {
         check_distance("distance", distance)?;
         out.fill(self.vertex_count(), |v, stack, hits| {
             let owner = self.topology.vertex_owner[v];
-            let seed = (owner != u32::MAX).then_some(owner);
+            let (ranges, seed) = match skip.ranges_of(v, self) {
+                Some((ranges, start)) => (ranges, (start != u32::MAX).then_some(start)),
+                None => (&[][..], (owner != u32::MAX).then_some(owner)),
+            };
             let skipped = skip.of(v);
             let v = v as u32;
             let excluded =
@@ -287,7 +315,7 @@ impl Hierarchy {
                 self.end()[v as usize],
                 distance,
                 seed,
-                excluded,
+                (ranges, excluded),
                 stack,
                 hits,
             );
@@ -335,7 +363,7 @@ impl Hierarchy {
             self.consider(&mut best, f, q, strict);
         }
         let bound = prune_bound(best.1);
-        self.visit_near(q, bound, seed, &mut scratch.stack, |f| {
+        self.visit_near(q, bound, seed, &mut scratch.stack, &[], |f| {
             self.consider(&mut best, f, q, strict);
             prune_bound(best.1)
         });
@@ -358,19 +386,21 @@ impl Hierarchy {
         }
     }
 
-    /// Appends every face within `distance` of `q` that is not `excluded` to `hits`; the walk
-    /// climbs from `seed`, an excluded face, when there is one.
+    /// Appends every face within `distance` of `q` that is not excluded to `hits`: a face is
+    /// excluded when it lies in one of the ranges of the depth-first order or `excluded` holds
+    /// for it, and the ranges must list excluded faces only. The walk climbs from `seed`, a
+    /// node whose faces are all excluded, when there is one.
     fn within(
         &self,
         q: DVec3,
         distance: f64,
         seed: Option<u32>,
-        excluded: impl Fn(u32) -> bool,
+        (ranges, excluded): (&[[u32; 2]], impl Fn(u32) -> bool),
         stack: &mut Stack,
         hits: &mut Vec<Closest>,
     ) {
         let bound = prune_bound(distance);
-        self.visit_near(q, bound, seed, stack, |f| {
+        self.visit_near(q, bound, seed, stack, ranges, |f| {
             if !excluded(f) {
                 hits.extend(
                     self.closest_on_face(f, q, distance)

@@ -20,7 +20,8 @@
 //! stops there, seed or not. A query that starts from a seed face (the answer to a
 //! nearby query) instead climbs from the seed's record to the root, descending into each
 //! sibling subtree whose box is within the bound: one box test per level where a descent from
-//! the root needs two, and the faces near the seed come first.
+//! the root needs two, and the faces near the seed come first. The seed may be a subtree whose
+//! faces the caller knows to skip, and the caller may name other subtrees to leave out.
 
 use parry3d_f64::math::Vector as DVec3;
 use rayon::prelude::*;
@@ -261,14 +262,17 @@ impl Boxes {
 
     /// Calls `leaf(face)` for every face whose box is within squared distance `bound` of `q`,
     /// nearer faces first; `leaf` returns the bound from then on, which may only shrink. With
-    /// a `seed` face, which the caller has already considered, the walk climbs from it (see the
-    /// module docs) and skips it. `stack` is scratch space.
+    /// a `seed` (a reference: `LEAF | face`, or a record), whose faces the caller has already
+    /// considered, the walk climbs from it (see the module docs) and skips its faces. Records
+    /// for which `skip(record)` holds are left out with every face below them. `stack` is
+    /// scratch space.
     pub(crate) fn visit_near(
         &self,
         q: DVec3,
         mut bound: f64,
         seed: Option<u32>,
         stack: &mut Vec<Pending>,
+        skip: impl Fn(u32) -> bool,
         mut leaf: impl FnMut(u32) -> f64,
     ) {
         if distance2(&self.root, q) > bound {
@@ -281,21 +285,25 @@ impl Boxes {
             return;
         };
         let Some(seed) = seed else {
-            self.descend(root as u32, q, bound, stack, &mut leaf);
+            if !skip(root as u32) {
+                self.descend(root as u32, q, bound, stack, &skip, &mut leaf);
+            }
             return;
         };
-        let slot = self.leaf_slot[seed as usize];
-        let (mut side, mut record) = (slot & 1, slot >> 1);
+        let (mut side, mut record) = match self.slot(seed) {
+            Some(slot) => (slot & 1, slot >> 1),
+            None => return,
+        };
         loop {
             let r = &self.records[record as usize];
             let other = (1 - side) as usize;
             if distance2(&r.boxes[other], q) <= bound {
                 let c = r.child[other];
-                bound = if c & LEAF != 0 {
-                    leaf(c & !LEAF)
-                } else {
-                    self.descend(c, q, bound, stack, &mut leaf)
-                };
+                if c & LEAF != 0 {
+                    bound = leaf(c & !LEAF);
+                } else if !skip(c) {
+                    bound = self.descend(c, q, bound, stack, &skip, &mut leaf);
+                }
             }
             if r.parent == NONE {
                 return;
@@ -306,14 +314,33 @@ impl Boxes {
         }
     }
 
+    /// Where the parent's record holds the node `node` refers to (`LEAF | face`, or a record):
+    /// `record << 1 | side`; `None` for the root.
+    fn slot(&self, node: u32) -> Option<u32> {
+        if node & LEAF != 0 {
+            Some(self.leaf_slot[(node & !LEAF) as usize])
+        } else {
+            let parent = self.records[node as usize].parent;
+            (parent != NONE)
+                .then(|| parent << 1 | u32::from(self.records[parent as usize].child[1] == node))
+        }
+    }
+
+    /// The record holding the node `node` refers to (`LEAF | face`, or a record); `None` for
+    /// the root.
+    pub(crate) fn parent(&self, node: u32) -> Option<u32> {
+        self.slot(node).map(|slot| slot >> 1)
+    }
+
     /// Visits the faces below `record` within `bound` of `q`, depth first and nearer child
-    /// first; returns the bound at the end.
+    /// first, leaving out the records `skip` names; returns the bound at the end.
     fn descend(
         &self,
         mut record: u32,
         q: DVec3,
         mut bound: f64,
         stack: &mut Vec<Pending>,
+        skip: &impl Fn(u32) -> bool,
         leaf: &mut impl FnMut(u32) -> f64,
     ) -> f64 {
         stack.clear();
@@ -329,17 +356,18 @@ impl Boxes {
             if dn <= bound {
                 if near & LEAF != 0 {
                     bound = leaf(near & !LEAF);
-                } else {
+                } else if !skip(near) {
                     next = Some(near);
                 }
             }
             if df <= bound {
                 if far & LEAF != 0 {
                     bound = leaf(far & !LEAF);
-                } else if next.is_none() {
-                    next = Some(far);
-                } else {
-                    stack.push((far, df));
+                } else if !skip(far) {
+                    match next {
+                        None => next = Some(far),
+                        Some(_) => stack.push((far, df)),
+                    }
                 }
             }
             record = match next {

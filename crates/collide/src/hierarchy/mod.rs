@@ -12,6 +12,8 @@ pub(crate) mod boxes;
 mod build;
 mod refit;
 
+use std::hash::{Hash, Hasher};
+
 use parry3d_f64::math::Vector as DVec3;
 use rayon::prelude::*;
 
@@ -22,6 +24,7 @@ use crate::memory::heap;
 use crate::topology::Topology;
 
 use boxes::Boxes;
+use boxes::LEAF;
 pub(crate) use boxes::Pending;
 
 /// Below this many nodes a level is refit on one thread.
@@ -44,6 +47,11 @@ pub struct Hierarchy {
     /// The faces in depth-first order: node `n` covers `leaf_order[leaf_first[n]..][..leaf_counts[n]]`.
     leaf_order: Vec<u32>,
     leaf_first: Vec<u32>,
+    /// The places `[first, end)` in `leaf_order` of the faces below each internal node, by
+    /// record (node `F + i` is record `i`).
+    record_spans: Vec<[u32; 2]>,
+    /// A hash of `leaf_order`.
+    order_fingerprint: u64,
     /// CSR over nodes: the directed boundary edges of each node's faces (see [`build`]).
     pub(crate) boundary_offsets: Vec<u32>,
     pub(crate) boundary: Vec<[u32; 2]>,
@@ -81,6 +89,8 @@ impl Hierarchy {
             leaf_counts: Vec::new(),
             leaf_order: Vec::new(),
             leaf_first: Vec::new(),
+            record_spans: Vec::new(),
+            order_fingerprint: 0,
             boundary_offsets: Vec::new(),
             boundary: Vec::new(),
             boxes: Boxes::default(),
@@ -105,6 +115,7 @@ impl Hierarchy {
             + heap(&self.leaf_counts)
             + heap(&self.leaf_order)
             + heap(&self.leaf_first)
+            + heap(&self.record_spans)
             + heap(&self.boundary_offsets)
             + heap(&self.boundary)
             + self.boxes.memory_bytes()
@@ -185,21 +196,79 @@ impl Hierarchy {
         for f in 0..faces {
             self.leaf_order[self.leaf_first[f] as usize] = f as u32;
         }
+        self.record_spans = (faces..faces + self.children.len())
+            .map(|n| [self.leaf_first[n], self.leaf_first[n] + self.leaf_counts[n]])
+            .collect();
+        let mut hasher = std::hash::DefaultHasher::new();
+        self.leaf_order.hash(&mut hasher);
+        self.order_fingerprint = hasher.finish();
     }
 
     /// Calls `leaf(face)` for every face whose box (at the last refit) is within squared
-    /// distance `bound` of `q`, except `seed` (which the caller has considered already), nearer
-    /// faces first; `leaf` returns the bound from then on, which may only shrink. `stack` is
-    /// scratch space, reused from query to query.
+    /// distance `bound` of `q`, except those below the node `seed` (which the caller has
+    /// considered already; the walk climbs from it) and below the nodes whose faces lie wholly
+    /// within one of the `skipped` ranges of the depth-first order
+    /// ([`Hierarchy::leaf_position`]), nearer faces first; `leaf` returns the bound from then
+    /// on, which may only shrink. `stack` is scratch space, reused from query to query.
     pub(crate) fn visit_near(
         &self,
         q: DVec3,
         bound: f64,
         seed: Option<u32>,
         stack: &mut Vec<Pending>,
+        skipped: &[[u32; 2]],
         leaf: impl FnMut(u32) -> f64,
     ) {
-        self.boxes.visit_near(q, bound, seed, stack, leaf);
+        let skip = |record: u32| self.within_ranges(record, skipped);
+        let seed = seed.map(|node| self.reference(node));
+        self.boxes.visit_near(q, bound, seed, stack, skip, leaf);
+    }
+
+    /// Whether the faces below record `record` lie wholly within one of `ranges` of the
+    /// depth-first order.
+    #[inline(always)]
+    fn within_ranges(&self, record: u32, ranges: &[[u32; 2]]) -> bool {
+        let [first, end] = self.record_spans[record as usize];
+        ranges.iter().any(|&[a, b]| a <= first && end <= b)
+    }
+
+    /// The reference to node `node` in the boxes' records: `LEAF | face`, or a record.
+    fn reference(&self, node: u32) -> u32 {
+        let faces = self.face_count() as u32;
+        if node < faces {
+            LEAF | node
+        } else {
+            node - faces
+        }
+    }
+
+    /// The highest node above face `f` (itself included) whose faces lie wholly within one of
+    /// `ranges` of the depth-first order.
+    pub(crate) fn highest_within(&self, f: u32, ranges: &[[u32; 2]]) -> u32 {
+        let mut node = LEAF | f;
+        while let Some(parent) = self.boxes.parent(node)
+            && self.within_ranges(parent, ranges)
+        {
+            node = parent;
+        }
+        let faces = self.face_count() as u32;
+        if node & LEAF != 0 {
+            node & !LEAF
+        } else {
+            faces + node
+        }
+    }
+
+    /// The place of face `f` in the depth-first order, where the faces below any node are
+    /// contiguous.
+    pub(crate) fn leaf_position(&self, f: u32) -> u32 {
+        self.leaf_first[f as usize]
+    }
+
+    /// A fingerprint of the depth-first order of the faces: two hierarchies with the same
+    /// fingerprint place the faces alike.
+    pub(crate) fn order_fingerprint(&self) -> u64 {
+        self.order_fingerprint
     }
 
     /// The boxes at the last refit.
