@@ -51,7 +51,8 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use tailor_cloth::{ContactState, Model, Motion, Settings, Simulator, State};
-use tailor_subdiv::{Mesh, Point};
+use tailor_subdiv::Point;
+use tailor_subdiv::obj::Frames;
 
 use crate::check::Clearances;
 use crate::checkpoint::{self, Checkpoint, FrameStats};
@@ -545,11 +546,15 @@ struct Output<'a> {
     dir: &'a Path,
     /// The first frame written.
     first: u32,
-    /// The garment's control mesh, its positions replaced each frame for writing.
-    control: Mesh,
+    /// The text of the garment's control mesh, with its groups, but its positions.
+    control: Frames,
     cloth: Surface,
+    /// The text of the written cloth surface but its positions and normals.
+    cloth_text: Frames,
     /// The refined body, set at each frame's pose (from the simulation) for the check.
     body: Option<Surface>,
+    /// The text of the written body but its positions.
+    body_text: Option<Frames>,
     /// The check's clearances of the frame before.
     clearances: Clearances,
     stats: Vec<FrameStats>,
@@ -567,12 +572,16 @@ impl<'a> Output<'a> {
             Some(b) => Some(Surface::new(&b.rest, b.level, false)?),
             None => None,
         };
+        let precision = scene.output.precision;
+        let doc = &scene.cloth.doc;
         Ok(Self {
             scene,
             dir,
             first,
-            control: scene.cloth.doc.mesh.clone(),
+            control: Frames::new(&doc.mesh, &doc.groups, false, precision),
+            cloth_text: cloth.frames(precision),
             cloth,
+            body_text: body.as_ref().map(|b| b.frames(precision)),
             body,
             clearances: Clearances::default(),
             stats,
@@ -622,18 +631,17 @@ impl<'a> Output<'a> {
         let name = |prefix: &str| self.dir.join(format!("{prefix}_{frame:04}.obj"));
         let out = &self.scene.output;
         if out.control_mesh {
-            self.control.set_positions(&state.positions)?;
-            let groups = &self.scene.cloth.doc.groups;
             write_atomically(&name("cloth_control"), |w| {
-                surface::write_with_groups(&self.control, groups, out.precision, w)
+                self.control.write(&state.positions, None, w)
             })?;
         }
         self.cloth
-            .write(&name("cloth"), &state.positions, out.precision)?;
+            .write(&name("cloth"), &state.positions, &self.cloth_text)?;
         if out.body
-            && let (Some(surface), Some(body)) = (&self.body, &self.scene.body)
+            && let (Some(surface), Some(text), Some(body)) =
+                (&self.body, &self.body_text, &self.scene.body)
         {
-            surface.write(&name("body"), body.control(frame), out.precision)?;
+            surface.write(&name("body"), body.control(frame), text)?;
         }
         Ok(())
     }

@@ -15,13 +15,12 @@
 //! stencil's largest weight) and which control face a refined face lies in (from the order in
 //! which uniform refinement numbers its faces).
 
-use std::io::{self, Write};
 use std::path::Path;
 
 use anyhow::{Context, Result};
 use nalgebra::Vector3;
 use tailor_collide::Hierarchy;
-use tailor_subdiv::obj::{self, Group, Precision};
+use tailor_subdiv::obj::{Frames, Precision};
 use tailor_subdiv::{Evaluator, Mesh, Point, Refiner, StencilTable};
 
 use crate::output::write_atomically;
@@ -144,12 +143,20 @@ impl Surface {
         &self.hierarchy
     }
 
+    /// The text of the refined mesh but its positions and normals, for [`Self::write`], with
+    /// coordinates at `precision`.
+    #[must_use]
+    pub fn frames(&self, precision: Precision) -> Frames {
+        Frames::new(&self.mesh, &[], self.tangents.is_some(), precision)
+    }
+
     /// Writes the refined mesh (with limit normals of control points `control` when the
-    /// surface was made with normals) atomically to `path`, coordinates at `precision`.
+    /// surface was made with normals) atomically to `path`, the rest of its text from `text`
+    /// ([`Self::frames`]).
     ///
     /// # Errors
     /// Any I/O error, naming the file.
-    pub fn write(&self, path: &Path, control: &[Point], precision: Precision) -> Result<()> {
+    pub fn write(&self, path: &Path, control: &[Point], text: &Frames) -> Result<()> {
         let normals = self.tangents.as_ref().map(|[t1, t2]| {
             let coords: Vec<Vector3<f64>> = control.iter().map(|p| p.coords).collect();
             let mut a = vec![Vector3::zeros(); t1.len()];
@@ -162,47 +169,9 @@ impl Surface {
                 .collect::<Vec<_>>()
         });
         write_atomically(path, |w| {
-            obj::write(&self.mesh, normals.as_deref(), precision, w)
+            text.write(self.mesh.positions(), normals.as_deref(), w)
         })
     }
-}
-
-/// Writes a control mesh with its OBJ groups: [`obj::write`]'s output at `precision` with a
-/// `g` line before each run of faces whose group memberships differ from the previous face's.
-///
-/// # Errors
-/// Any I/O error.
-pub fn write_with_groups(
-    mesh: &Mesh,
-    groups: &[Group],
-    precision: Precision,
-    out: &mut impl Write,
-) -> io::Result<()> {
-    let mut names: Vec<Vec<&str>> = vec![Vec::new(); mesh.face_count()];
-    for g in groups {
-        for &f in &g.faces {
-            names[f as usize].push(&g.name);
-        }
-    }
-    let mut hole = vec![false; mesh.face_count()];
-    for &f in mesh.holes() {
-        hole[f as usize] = true;
-    }
-    let mut written = (0..mesh.face_count()).filter(|&f| !hole[f]);
-    let mut text = Vec::new();
-    obj::write(mesh, None, precision, &mut text)?;
-    let mut current: &[&str] = &[];
-    for line in text.split_inclusive(|&b| b == b'\n') {
-        if line.starts_with(b"f ")
-            && let Some(f) = written.next()
-            && names[f] != current
-        {
-            current = &names[f];
-            writeln!(out, "g {}", current.join(" "))?;
-        }
-        out.write_all(line)?;
-    }
-    Ok(())
 }
 
 #[cfg(test)]
@@ -212,7 +181,7 @@ mod tests {
     /// A unit quad (vertices 0-3) and a triangle (1, 4, 2) on its right, sharing edge 1-2.
     fn quad_and_triangle(level: u32) -> Surface {
         let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0.5 0\nf 1 2 3 4\nf 2 5 3\n";
-        let doc = obj::parse(text, "t.obj").unwrap();
+        let doc = tailor_subdiv::obj::parse(text, "t.obj").unwrap();
         Surface::new(&doc.mesh, level, false).unwrap()
     }
 
@@ -271,16 +240,5 @@ mod tests {
         let two = quad_and_triangle(2);
         let corners: Vec<_> = (13..20).map(|v| two.control_vertex(v)).collect();
         assert_eq!(corners, [0, 1, 2, 3, 1, 4, 2].map(Some));
-    }
-
-    #[test]
-    fn groups_survive_a_round_trip() {
-        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n\
-                    g cape attach\nf 1 2 3 4\ng cape\nf 2 5 6 3\n";
-        let doc = obj::parse(text, "t.obj").unwrap();
-        let mut out = Vec::new();
-        write_with_groups(&doc.mesh, &doc.groups, Precision::Single, &mut out).unwrap();
-        let back = obj::parse(&String::from_utf8(out).unwrap(), "back.obj").unwrap();
-        assert_eq!(back, doc);
     }
 }

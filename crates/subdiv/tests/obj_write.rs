@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use nalgebra::Vector3;
-use tailor_subdiv::obj::{Precision, parse, read, write};
+use tailor_subdiv::obj::{Frames, Precision, parse, read, write};
 use tailor_subdiv::{
     BoundaryInterpolation, Corner, Crease, CreaseMethod, FVarLinear, FaceVarying, Mesh, Options,
     Point, TriangleRule, Uv,
@@ -34,6 +34,19 @@ fn grid() -> Mesh {
         p(2., 1.),
     ];
     Mesh::from_polygons(positions, &[[0u32, 1, 4, 3], [1, 2, 5, 4]]).unwrap()
+}
+
+/// The corners of the unit square as UVs, indexed per face corner by `indices`.
+fn square_uvs(indices: Vec<u32>) -> FaceVarying {
+    FaceVarying {
+        values: vec![
+            Uv::new(0.0, 0.0),
+            Uv::new(1.0, 0.0),
+            Uv::new(1.0, 1.0),
+            Uv::new(0.0, 1.0),
+        ],
+        indices,
+    }
 }
 
 /// Random finite doubles over the whole exponent range, from a fixed-seed LCG.
@@ -136,16 +149,9 @@ fn normals_are_written_per_vertex() {
     assert!(text.contains("f 1//1 2//2 5//5 4//4\n"));
     assert_eq!(parse(&text, "n").unwrap().mesh, mesh);
 
-    let uvs = FaceVarying {
-        values: vec![
-            Uv::new(0.0, 0.0),
-            Uv::new(1.0, 0.0),
-            Uv::new(1.0, 1.0),
-            Uv::new(0.0, 1.0),
-        ],
-        indices: vec![0, 1, 2, 3, 0, 1, 2, 3],
-    };
-    let textured = grid().with_uvs(uvs).unwrap();
+    let textured = grid()
+        .with_uvs(square_uvs(vec![0, 1, 2, 3, 0, 1, 2, 3]))
+        .unwrap();
     let text = to_text(&textured, Some(&normals));
     assert!(text.contains("f 2/1/2 3/2/3 6/3/6 5/4/5\n"), "{text}");
     assert_eq!(parse(&text, "n").unwrap().mesh, textured);
@@ -332,4 +338,71 @@ fn reference_shapes_round_trip() {
         checked += 1;
     }
     assert!(checked >= 83, "{checked} shapes round-tripped");
+}
+
+#[test]
+fn frames_write_what_write_writes_at_each_frames_positions() {
+    // UVs, normals, a hole and tags: every part of the text that stays from frame to frame.
+    let mut mesh = grid()
+        .with_uvs(square_uvs(vec![0, 1, 2, 3, 1, 0, 3, 2]))
+        .unwrap()
+        .with_creases(vec![Crease {
+            vertices: [1, 4],
+            sharpness: 2.5,
+        }])
+        .unwrap()
+        .with_holes(vec![1])
+        .unwrap();
+    let normals: Vec<Vector3<f64>> = (0..6)
+        .map(|i| Vector3::new(0.1 * f64::from(i), 0.0, 1.0))
+        .collect();
+    for precision in [Precision::Single, Precision::Full] {
+        for with_normals in [false, true] {
+            let (given, other) = if with_normals {
+                (Some(&normals[..]), None)
+            } else {
+                (None, Some(&normals[..]))
+            };
+            let frames = Frames::new(&mesh, &[], with_normals, precision);
+            for t in [0.0, 0.37, 1.0 / 3.0] {
+                let moved: Vec<Point> = mesh
+                    .positions()
+                    .iter()
+                    .map(|p| Point::new(p.x + t, p.y * (1.0 + t), t * t))
+                    .collect();
+                mesh.set_positions(&moved).unwrap();
+                let (mut once, mut framed) = (Vec::new(), Vec::new());
+                write(&mesh, given, precision, &mut once).unwrap();
+                frames.write(&moved, given, &mut framed).unwrap();
+                assert_eq!(
+                    String::from_utf8(framed).unwrap(),
+                    String::from_utf8(once).unwrap()
+                );
+            }
+            let wrong = |positions: &[Point], normals| {
+                let err = frames
+                    .write(positions, normals, &mut Vec::new())
+                    .unwrap_err();
+                assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+            };
+            wrong(&mesh.positions()[..5], given);
+            wrong(mesh.positions(), other);
+        }
+    }
+}
+
+#[test]
+fn frames_keep_the_groups() {
+    let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nv 3 0 0\nv 3 1 0\n\
+                f 1 2 3 4\ng cape attach\nf 2 5 6 3\ng cape\nf 5 7 8 6\n";
+    let doc = parse(text, "t.obj").unwrap();
+    let frames = Frames::new(&doc.mesh, &doc.groups, false, Precision::Single);
+    let mut out = Vec::new();
+    frames.write(doc.mesh.positions(), None, &mut out).unwrap();
+    let written = String::from_utf8(out).unwrap();
+    assert!(
+        written.contains("f 1 2 3 4\ng cape attach\nf 2 5 6 3\ng cape\nf 5 7 8 6\n"),
+        "{written}"
+    );
+    assert_eq!(parse(&written, "back.obj").unwrap(), doc);
 }

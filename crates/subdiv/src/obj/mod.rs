@@ -87,7 +87,7 @@ mod read;
 mod write;
 
 pub use read::{parse, parse_with, read, read_with};
-pub use write::write;
+pub use write::{Frames, write};
 
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{BoundaryInterpolation, CreaseMethod, FVarLinear, TriangleRule, named_option};

@@ -5,6 +5,11 @@
 //! file order, so the bytes do not depend on the thread count; at most two batches of
 //! [`BATCH_CHUNKS`] chunks are held as text at once, one being written while the next is
 //! formatted.
+//!
+//! A sequence of frames of one mesh ([`Frames`], what `tailor simulate` writes) formats the
+//! lines that do not change (UVs, groups, faces, tags) once and keeps them as text, so a frame
+//! formats only its positions and normals: on the 64² drape, whose written surface has as many
+//! faces and UVs as vertices, that is two thirds of the numbers.
 
 use std::collections::HashSet;
 use std::fmt;
@@ -13,8 +18,10 @@ use std::io::{self, BufWriter, Write};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use super::{BOUNDARY_CODES, CREASE_METHOD_NAMES, FVAR_CODES, Precision, TRIANGLE_RULE_NAMES};
-use crate::mesh::Mesh;
+use super::{
+    BOUNDARY_CODES, CREASE_METHOD_NAMES, FVAR_CODES, Group, Precision, TRIANGLE_RULE_NAMES,
+};
+use crate::mesh::{Mesh, Point};
 use crate::options::Options;
 
 /// Lines formatted by one task: enough that a task outweighs its scheduling (a 1.6 M-face
@@ -40,40 +47,148 @@ pub fn write(
     precision: Precision,
     out: &mut impl Write,
 ) -> io::Result<()> {
-    if let Some(n) = normals
-        && n.len() != mesh.vertex_count()
-    {
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!("{} normals for {} vertices", n.len(), mesh.vertex_count()),
-        ));
+    if let Some(n) = normals {
+        check_count(n.len(), "normals", mesh.vertex_count())?;
     }
     let mut w = BufWriter::new(out);
-    let positions = mesh.positions();
-    write_lines(&mut w, positions.len(), |v, line| {
+    write_positions(&mut w, mesh.positions(), precision)?;
+    write_uvs(&mut w, mesh, precision)?;
+    write_normals(&mut w, normals.unwrap_or_default(), precision)?;
+    write_faces(&mut w, mesh, normals.is_some(), &[])?;
+    w.flush()
+}
+
+/// The OBJ text of a mesh whose positions (and normals) change from frame to frame while its
+/// faces, UVs, groups and tags stay: the lines that stay are formatted once, and each frame
+/// formats only its positions and normals. A frame's bytes are those [`write()`] gives for the
+/// mesh at that frame's positions, with a `g` line before each run of faces whose groups
+/// differ from the face before's.
+#[derive(Clone, Debug)]
+pub struct Frames {
+    precision: Precision,
+    vertex_count: usize,
+    normals: bool,
+    /// The `vt` lines.
+    uvs: Vec<u8>,
+    /// The `g` and `f` lines and the tags.
+    faces: Vec<u8>,
+}
+
+impl Frames {
+    /// The frames of `mesh` with `groups`, with one normal per vertex when `normals`, the
+    /// coordinates at `precision`.
+    #[must_use]
+    pub fn new(mesh: &Mesh, groups: &[Group], normals: bool, precision: Precision) -> Self {
+        let (mut uvs, mut faces) = (Vec::new(), Vec::new());
+        write_uvs(&mut uvs, mesh, precision).expect("writing to memory");
+        write_faces(&mut faces, mesh, normals, groups).expect("writing to memory");
+        Self {
+            precision,
+            vertex_count: mesh.vertex_count(),
+            normals,
+            uvs,
+            faces,
+        }
+    }
+
+    /// Writes the frame with `positions` and `normals`, buffered internally.
+    ///
+    /// # Errors
+    /// Any error of `out`; [`io::ErrorKind::InvalidInput`] if `positions` or `normals` do not
+    /// have one entry per vertex, or normals are given to frames made without them or missing
+    /// from frames made with them.
+    pub fn write(
+        &self,
+        positions: &[Point],
+        normals: Option<&[Vector3<f64>]>,
+        out: &mut impl Write,
+    ) -> io::Result<()> {
+        check_count(positions.len(), "positions", self.vertex_count)?;
+        match (normals, self.normals) {
+            (Some(n), true) => check_count(n.len(), "normals", self.vertex_count)?,
+            (None, false) => {}
+            (Some(_), false) => return Err(invalid("normals for frames made without".into())),
+            (None, true) => return Err(invalid("no normals for frames made with them".into())),
+        }
+        let mut w = BufWriter::new(out);
+        write_positions(&mut w, positions, self.precision)?;
+        w.write_all(&self.uvs)?;
+        write_normals(&mut w, normals.unwrap_or_default(), self.precision)?;
+        w.write_all(&self.faces)?;
+        w.flush()
+    }
+}
+
+/// An [`io::ErrorKind::InvalidInput`] error saying `what`.
+fn invalid(what: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, what)
+}
+
+/// Checks that there are as many entries (`count` of `what`) as `vertices`.
+fn check_count(count: usize, what: &str, vertices: usize) -> io::Result<()> {
+    if count == vertices {
+        Ok(())
+    } else {
+        Err(invalid(format!("{count} {what} for {vertices} vertices")))
+    }
+}
+
+/// The `v` lines of `positions`.
+fn write_positions(
+    w: &mut impl Write,
+    positions: &[Point],
+    precision: Precision,
+) -> io::Result<()> {
+    write_lines(w, positions.len(), |v, line| {
         let p = positions[v];
         push_numbers(line, b"v", &[p.x, p.y, p.z], precision);
-    })?;
-    let uvs = mesh.uvs();
-    let uv_values = uvs.map_or(&[][..], |uvs| &uvs.values);
-    write_lines(&mut w, uv_values.len(), |k, line| {
+    })
+}
+
+/// The `vt` lines of `mesh`'s UVs, if it has any.
+fn write_uvs(w: &mut impl Write, mesh: &Mesh, precision: Precision) -> io::Result<()> {
+    let uv_values = mesh.uvs().map_or(&[][..], |uvs| &uvs.values);
+    write_lines(w, uv_values.len(), |k, line| {
         let uv = uv_values[k];
         push_numbers(line, b"vt", &[uv.x, uv.y], precision);
-    })?;
-    let normal_values = normals.unwrap_or_default();
-    write_lines(&mut w, normal_values.len(), |v, line| {
-        let n = normal_values[v];
-        push_numbers(line, b"vn", &[n.x, n.y, n.z], precision);
-    })?;
+    })
+}
 
+/// The `vn` lines of `normals`.
+fn write_normals(
+    w: &mut impl Write,
+    normals: &[Vector3<f64>],
+    precision: Precision,
+) -> io::Result<()> {
+    write_lines(w, normals.len(), |v, line| {
+        let n = normals[v];
+        push_numbers(line, b"vn", &[n.x, n.y, n.z], precision);
+    })
+}
+
+/// The `f` lines of `mesh`'s faces but its holes, naming a normal per vertex when
+/// `with_normals`, with a `g` line before each run of faces whose `groups` differ from the
+/// face before's (none before the first faces when they are in none), then the tags.
+fn write_faces(
+    w: &mut impl Write,
+    mesh: &Mesh,
+    with_normals: bool,
+    groups: &[Group],
+) -> io::Result<()> {
     let mut hole = vec![false; mesh.face_count()];
     for &f in mesh.holes() {
         hole[f as usize] = true;
     }
-    let (face_vertices, with_normals) = (mesh.face_vertices(), normals.is_some());
-    write_lines(&mut w, mesh.face_count(), |f, line| {
+    let group_lines = group_lines(mesh.face_count(), &hole, groups);
+    let (face_vertices, uvs) = (mesh.face_vertices(), mesh.uvs());
+    write_lines(w, mesh.face_count(), |f, line| {
         if hole[f] {
             return;
+        }
+        if !group_lines.is_empty()
+            && let Ok(k) = group_lines.binary_search_by_key(&f, |(g, _)| *g)
+        {
+            line.extend_from_slice(group_lines[k].1.as_bytes());
         }
         let mut integer = itoa::Buffer::new();
         let mut push = |line: &mut Vec<u8>, index: u32| {
@@ -96,8 +211,30 @@ pub fn write(
         line.push(b'\n');
     })?;
 
-    write_tags(mesh, &hole, &mut w)?;
-    w.flush()
+    write_tags(mesh, &hole, w)
+}
+
+/// The `g` line to write before each face that starts a run of faces in other `groups` than
+/// the face before (a face in no group after grouped ones gets an empty `g` line); holes are
+/// not written, so they neither start nor break a run.
+fn group_lines(face_count: usize, hole: &[bool], groups: &[Group]) -> Vec<(usize, String)> {
+    let mut names: Vec<Vec<&str>> = vec![Vec::new(); face_count];
+    for g in groups {
+        for &f in &g.faces {
+            if let Some(names) = names.get_mut(f as usize) {
+                names.push(&g.name);
+            }
+        }
+    }
+    let mut lines = Vec::new();
+    let mut current: &[&str] = &[];
+    for f in (0..face_count).filter(|&f| !hole[f]) {
+        if names[f] != current {
+            current = &names[f];
+            lines.push((f, format!("g {}\n", current.join(" "))));
+        }
+    }
+    lines
 }
 
 /// Writes `count` lines, line `i` appended to its chunk's text by `line(i, text)`: a batch of
