@@ -7,10 +7,20 @@
 //! touching), and a pair of faces `(f, g)` tests the edges *owned* by `f` against those owned
 //! by `g` (see [`crate::topology`]), so each pair of edges is tested once. The closest points
 //! between two segments are Ericson's (*Real-Time Collision Detection*, §5.1.9).
+//!
+//! As the vertex–face pairs do ([`crate::local`]), a query may leave out the pairs the rest
+//! shape holds that near: given the table of faces around each vertex, an edge is skipped
+//! against another lying on a face around one of its ends (a face listed for that end, or one
+//! using it). On a mesh finer than the distance, an edge within it of another in the rest shape
+//! lies within the distance plus an edge length of each end, on the faces listed for that end
+//! when the table was made a little farther out than the query (as the cloth's is, at 1.5
+//! thicknesses); on a coarse mesh, only the edges of the faces around an end are skipped, which
+//! are the pairs a fold within one or two faces brings together.
 
 use crate::convert::{to_glam, to_vector};
 use crate::error::CollideError;
 use crate::hierarchy::{Hierarchy, check_distance, fresh};
+use crate::proximity::LocalFaces;
 use crate::traverse::self_pairs;
 use crate::triangle::segment_closest;
 use crate::{Point, Vector};
@@ -49,12 +59,19 @@ impl Hierarchy {
     }
 
     /// Every pair of edges sharing no vertex whose closest points are within `distance`, at
-    /// the positions of the last refit (the end positions of a swept refit), sorted by edges.
+    /// the positions of the last refit (the end positions of a swept refit), sorted by edges,
+    /// except the pairs where one edge lies on a face around an end of the other: a face
+    /// `skip` lists for that end ([`Hierarchy::local_faces`]), or one using it (see the module
+    /// docs). With the empty table only the faces using an end count.
     ///
     /// # Errors
     /// [`CollideError::BadDistance`] for a negative or NaN distance.
-    pub fn edge_proximity(&self, distance: f64) -> Result<Vec<EdgeProximity>, CollideError> {
-        fresh(|out| self.edge_proximity_into(distance, out))
+    pub fn edge_proximity(
+        &self,
+        distance: f64,
+        skip: &LocalFaces,
+    ) -> Result<Vec<EdgeProximity>, CollideError> {
+        fresh(|out| self.edge_proximity_into(distance, skip, out))
     }
 
     /// [`Hierarchy::edge_proximity`] into `out` (cleared first), reusing its allocation.
@@ -64,16 +81,23 @@ impl Hierarchy {
     pub fn edge_proximity_into(
         &self,
         distance: f64,
+        skip: &LocalFaces,
         out: &mut Vec<EdgeProximity>,
     ) -> Result<(), CollideError> {
         check_distance("distance", distance)?;
+        let users = self.vertex_faces();
         let visit = |a: u32, b: u32, out: &mut Vec<EdgeProximity>| {
             let (f, g) = (a.min(b), a.max(b));
             let (mine, theirs) = (self.topology.owned_edges(f), self.topology.owned_edges(g));
             for (i, &e) in mine.iter().enumerate() {
                 let theirs = if f == g { &theirs[i + 1..] } else { theirs };
                 for &o in theirs {
-                    out.extend(self.edges_near(e.min(o), e.max(o), distance));
+                    let (e, o) = (e.min(o), e.max(o));
+                    if let Some(near) = self.edges_near(e, o, distance)
+                        && !self.edges_around(e, o, skip, &users)
+                    {
+                        out.push(near);
+                    }
                 }
             }
         };
@@ -81,6 +105,28 @@ impl Hierarchy {
         out.append(&mut self_pairs(self, None, true, distance, None, &visit));
         out.sort_unstable_by_key(|p| p.edges);
         Ok(())
+    }
+
+    /// Whether either of edges `e` and `o` lies on a face around an end of the other: one
+    /// `skip` lists for that end, or one of `users`, the faces using each vertex.
+    fn edges_around(&self, e: u32, o: u32, skip: &LocalFaces, users: &LocalFaces) -> bool {
+        let edges = &self.topology.edges;
+        let lies_on = |edge: [u32; 2], f: u32| {
+            let face = self.topology.face(f);
+            face.contains(&edge[0]) && face.contains(&edge[1])
+        };
+        let around = |edge: [u32; 2], other: [u32; 2]| {
+            edge.iter().any(|&v| {
+                let v = v as usize;
+                users
+                    .of(v)
+                    .iter()
+                    .chain(skip.of(v))
+                    .any(|&f| lies_on(other, f))
+            })
+        };
+        let (a, b) = (edges[e as usize], edges[o as usize]);
+        around(a, b) || around(b, a)
     }
 
     /// Edges `e` and `o` (`e < o`) when they share no vertex and come within `distance`.
@@ -141,7 +187,7 @@ mod tests {
             p(3.0, 1.0, 0.0),
         ];
         let h = Hierarchy::build(&positions, &[0, 3, 6], &[0, 1, 2, 3, 4, 5]).unwrap();
-        let near = h.edge_proximity(2.0).unwrap();
+        let near = h.edge_proximity(2.0, &LocalFaces::default()).unwrap();
         let pairs: Vec<[[u32; 2]; 2]> = near
             .iter()
             .map(|n| n.edges.map(|e| h.edges()[e as usize]))
@@ -157,5 +203,28 @@ mod tests {
         let first = near[0];
         assert_eq!((first.distance, first.parameters), (2.0, [1.0, 0.0]));
         assert_eq!(first.direction, Vector::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn an_edge_is_not_near_the_edges_of_the_faces_at_its_ends() {
+        // Two unit quads in a row along x. The opposite sides of one quad lie on a face using
+        // each other's ends, as does its diagonal; the outer sides of the row, two apart, do
+        // not.
+        let p = |x: f64, y: f64| Point::new(x, y, 0.0);
+        let positions = [
+            p(0.0, 0.0),
+            p(1.0, 0.0),
+            p(2.0, 0.0),
+            p(0.0, 1.0),
+            p(1.0, 1.0),
+            p(2.0, 1.0),
+        ];
+        let h = Hierarchy::build(&positions, &[0, 4, 8], &[0, 1, 4, 3, 1, 2, 5, 4]).unwrap();
+        let near = h.edge_proximity(2.0, &LocalFaces::default()).unwrap();
+        let pairs: Vec<[[u32; 2]; 2]> = near
+            .iter()
+            .map(|n| n.edges.map(|e| h.edges()[e as usize]))
+            .collect();
+        assert_eq!(pairs, [[[0, 3], [2, 5]]]);
     }
 }

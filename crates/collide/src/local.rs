@@ -130,7 +130,7 @@ impl Hierarchy {
     }
 
     /// The faces using each vertex, sorted (the corners grouped by their vertex, in order).
-    fn vertex_faces(&self) -> LocalFaces {
+    pub(crate) fn vertex_faces(&self) -> LocalFaces {
         let t = &self.topology;
         let (offsets, corners) = group_by_owner(&t.face_vertices, t.vertex_count);
         let corner_face: Vec<u32> = (0..t.face_count() as u32)

@@ -707,7 +707,7 @@ fn answers_do_not_depend_on_thread_count() {
                 h.self_intersections(),
                 impacts,
                 body_hits,
-                h.edge_proximity(0.02).unwrap(),
+                h.edge_proximity(0.02, &LocalFaces::default()).unwrap(),
             )
         })
     };
@@ -856,15 +856,31 @@ fn vertex_impacts_with_a_body_match_brute_force() {
     }
 }
 
-/// Brute force: every pair of edges sharing no vertex within `d`, as (edges, distance bits,
+/// Brute force: every pair of edges sharing no vertex within `d`, neither lying on a face
+/// that uses an end of the other or that `skip` lists for that end, as (edges, distance bits,
 /// parameter bits).
-fn brute_edge_proximity(m: &Mesh, positions: &[Point], d: f64) -> Vec<(u32, u32, u64, [u64; 2])> {
+fn brute_edge_proximity(
+    m: &Mesh,
+    positions: &[Point],
+    d: f64,
+    skip: &LocalFaces,
+) -> Vec<(u32, u32, u64, [u64; 2])> {
     let edges = unique_edges(m);
     let at = |e: [u32; 2]| e.map(|v| positions[v as usize]);
+    let faces = m.offsets.len() - 1;
+    let around = |edge: [u32; 2], other: [u32; 2]| {
+        edge.iter().any(|&v| {
+            (0..faces as u32).any(|f| {
+                let corners = m.face_corners(f);
+                let near_end = corners.contains(&v) || skip.of(v as usize).contains(&f);
+                near_end && other.iter().all(|w| corners.contains(w))
+            })
+        })
+    };
     let mut found = Vec::new();
     for (i, &a) in edges.iter().enumerate() {
         for (j, &b) in edges.iter().enumerate().skip(i + 1) {
-            if a.iter().any(|v| b.contains(v)) {
+            if a.iter().any(|v| b.contains(v)) || around(a, b) || around(b, a) {
                 continue;
             }
             let (t, distance) = segments_closest_points(at(a), at(b));
@@ -881,11 +897,15 @@ fn edge_proximity_matches_brute_force() {
     let mut found_any = false;
     for (name, m) in meshes() {
         assert_eq!(build(&m).edges(), unique_edges(&m).as_slice(), "{name}");
-        for positions in [m.positions.clone(), m.mapped(crumpled)] {
-            let mut h = build(&m);
+        let mut h = build(&m);
+        let tables = [LocalFaces::default(), h.local_faces(0.1).unwrap()];
+        for (positions, skip) in [m.positions.clone(), m.mapped(crumpled)]
+            .into_iter()
+            .flat_map(|p| tables.iter().map(move |t| (p.clone(), t)))
+        {
             h.refit(&positions, 0.0).unwrap();
             for d in [0.02, 0.15] {
-                let near = h.edge_proximity(d).unwrap();
+                let near = h.edge_proximity(d, skip).unwrap();
                 let got: Vec<_> = near
                     .iter()
                     .map(|p| {
@@ -893,7 +913,7 @@ fn edge_proximity_matches_brute_force() {
                         (i, j, p.distance.to_bits(), p.parameters.map(f64::to_bits))
                     })
                     .collect();
-                let want = brute_edge_proximity(&m, &positions, d);
+                let want = brute_edge_proximity(&m, &positions, d, skip);
                 found_any |= !want.is_empty();
                 assert_same(&got, &want, name);
                 for p in &near {
@@ -955,13 +975,21 @@ fn into_variants_reuse_their_buffers() {
             near,
             h.self_proximity(0.05, &LocalFaces::default()).unwrap()
         );
-        h.edge_proximity_into(0.05, &mut edges).unwrap();
-        assert_eq!(edges, h.edge_proximity(0.05).unwrap());
+        // The layers lie 0.2 apart at the end of the second step.
+        h.edge_proximity_into(0.25, &LocalFaces::default(), &mut edges)
+            .unwrap();
+        assert_eq!(
+            edges,
+            h.edge_proximity(0.25, &LocalFaces::default()).unwrap()
+        );
     }
     assert!(!impacts.vertex_triangle.is_empty() && !edges.is_empty());
     // A bad argument is an error that leaves the buffer as it was.
     let before = edges.clone();
-    assert!(h.edge_proximity_into(-1.0, &mut edges).is_err());
+    assert!(
+        h.edge_proximity_into(-1.0, &LocalFaces::default(), &mut edges)
+            .is_err()
+    );
     assert_eq!(edges, before);
 }
 
