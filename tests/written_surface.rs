@@ -24,15 +24,13 @@
 //! The suite runs the 32² drape at level 2 through its folding; the heavier drapes (64² and
 //! 128², 1, 2 and 5 substeps, levels 0–3) are `#[ignore]`d, and CI runs them in release.
 
-use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use nalgebra::Vector3;
 use tailor_cloth::shapes;
 use tailor_subdiv::Point;
-use tailor_subdiv::obj::{self, Precision};
 
-use common::{scratch, tailor};
+use common::{check_findings, scratch, simulate_scene, write_mesh};
 
 mod common;
 
@@ -46,12 +44,7 @@ fn drape(
     nudge: f64,
 ) -> (PathBuf, serde_json::Value) {
     let dir = scratch(name);
-    let write = |file: &str, mesh: &tailor_subdiv::Mesh| {
-        let mut text = Vec::new();
-        obj::write(mesh, None, Precision::Full, &mut text).unwrap();
-        fs::write(dir.join(file), text).unwrap();
-    };
-    write("sheet.obj", &shapes::centred_sheet(n, 2.0));
+    write_mesh(&dir, "sheet.obj", &shapes::centred_sheet(n, 2.0));
     let mut sphere = shapes::sphere(Point::new(0.0, -1.0, 0.0), 0.5, 24, 48);
     if nudge != 0.0 {
         let moved: Vec<Point> = sphere
@@ -61,7 +54,7 @@ fn drape(
             .collect();
         sphere.set_positions(&moved).unwrap();
     }
-    write("sphere.obj", &sphere);
+    write_mesh(&dir, "sphere.obj", &sphere);
     let scene = format!(
         "[scene]\nfps = 24\nframes = {frames}\nsubsteps = {substeps}\n\n\
          [cloth]\nmesh = \"sheet.obj\"\nmaterial = \"cotton\"\nthickness = 0.005\n\
@@ -69,22 +62,8 @@ fn drape(
          [body]\nmesh = \"sphere.obj\"\nsubdivision_level = 0\n\n\
          [output]\ndir = \"out\"\nsubdivision_level = {level}\n"
     );
-    let path = dir.join("drape.toml");
-    fs::write(&path, scene).unwrap();
-    let out = tailor(&["simulate", path.to_str().unwrap()]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = dir.join("out");
-    let summary = summary(&out);
-    (out, summary)
-}
-
-fn summary(out: &Path) -> serde_json::Value {
-    serde_json::from_slice(&fs::read(out.join("summary.json")).unwrap()).unwrap()
+    let summary = simulate_scene(&dir, "drape.toml", &scene);
+    (dir.join("out"), summary)
 }
 
 /// Asserts that the drape wrote every frame clean and kept its strain within the run's own
@@ -113,14 +92,11 @@ fn assert_clean_at(n: u32, [substeps, level, frames]: [u32; 3], nudge: f64) {
         summary["failures"]
     );
     if dir.join("cloth_control_0000.obj").exists() {
-        let pattern = dir.join("cloth_control_####.obj");
-        let out = tailor(&["check", pattern.to_str().unwrap()]);
-        assert_eq!(
-            out.status.code(),
-            Some(0),
+        let findings = check_findings(&dir.join("cloth_control_####.obj"));
+        assert!(
+            findings.is_none(),
             "the {n}² drape at {substeps} substeps writes a control mesh that crosses itself \
-             (level {level}): {}",
-            String::from_utf8_lossy(&out.stdout)
+             (level {level}): {findings:?}"
         );
     }
     // Strain is judged as the run judges it: no frame ends more than a percentage point past

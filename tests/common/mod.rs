@@ -7,6 +7,9 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use tailor_subdiv::Mesh;
+use tailor_subdiv::obj::{self, Precision};
+
 /// A fresh, empty directory `name` under the build's temporary directory.
 pub fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
@@ -35,4 +38,33 @@ pub fn shape(name: &str) -> String {
         .join(name)
         .display()
         .to_string()
+}
+
+/// Writes `mesh` into `dir` as `file`, coordinates in full.
+pub fn write_mesh(dir: &Path, file: &str, mesh: &Mesh) {
+    let mut text = Vec::new();
+    obj::write(mesh, None, Precision::Full, &mut text).unwrap();
+    fs::write(dir.join(file), text).unwrap();
+}
+
+/// Writes `scene` into `dir` as `file`, runs `tailor simulate` on it and asserts it succeeded;
+/// returns the run's `summary.json`. The scene writes into `dir/out`.
+pub fn simulate_scene(dir: &Path, file: &str, scene: &str) -> serde_json::Value {
+    let path = dir.join(file);
+    fs::write(&path, scene).unwrap();
+    let out = tailor(&["simulate", path.to_str().unwrap()]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&fs::read(dir.join("out/summary.json")).unwrap()).unwrap()
+}
+
+/// Runs `tailor check` on the frames `pattern` names and returns its report when it finds
+/// anything (or fails), `None` when every frame is clean.
+pub fn check_findings(pattern: &Path) -> Option<String> {
+    let out = tailor(&["check", pattern.to_str().unwrap()]);
+    (out.status.code() != Some(0)).then(|| String::from_utf8_lossy(&out.stdout).into_owned())
 }
