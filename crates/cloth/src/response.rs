@@ -231,6 +231,10 @@ impl Response {
         h: f64,
         contact: Impulses,
     ) -> Result<u32, CollideError> {
+        // What zones moved is relaxed within the substep; the settling's last round may leave
+        // some when it runs out of rounds, which the next substep must not inherit (it is no
+        // part of the state a checkpoint keeps).
+        self.zoned.fill(false);
         // Coulomb's law on the solve's contact impulses first: strain limiting and the
         // collision passes have the last word.
         self.collisions.friction(settings, contact, &mut integrator);
