@@ -95,7 +95,8 @@ pub(crate) struct Friction {
     force: Vec<Vec3>,
     /// Which vertices have a contact in the current substep.
     touching: Vec<bool>,
-    /// Each contact vertex's tangential speed relative to the body at the substep's start.
+    /// Each contact vertex's tangential speed relative to the body at the substep's start
+    /// (zero for the contacts the solve's second look adds).
     start_speed: Vec<f64>,
 }
 
@@ -128,6 +129,12 @@ impl Friction {
     ) {
         self.force.fill(Vec3::zeros());
         self.touching.fill(false);
+        // A contact the second look after the solve adds (`Collisions::missed_contacts`) has
+        // no speed at the start recorded here, and so cannot start to stick before its next
+        // substep: its zero here, not whatever speed an earlier substep left, which a run
+        // resumed from a checkpoint would not have (a crumpled pile resumed at frame 12
+        // stuck two contacts fewer in frame 13's second substep, and went its own way).
+        self.start_speed.fill(0.0);
         let ContactState {
             stuck,
             normal_force,
