@@ -94,7 +94,7 @@ impl Hierarchy {
                 for &o in theirs {
                     let (e, o) = (e.min(o), e.max(o));
                     if let Some(near) = self.edges_near(e, o, distance)
-                        && !self.edges_around(e, o, skip, &users)
+                        && !self.edges_around(e, o, skip, users)
                     {
                         out.push(near);
                     }

@@ -51,7 +51,7 @@ impl Hierarchy {
         let users = self.vertex_faces();
         let lists: Vec<Vec<u32>> = (0..self.vertex_count())
             .into_par_iter()
-            .map(|v| self.reached(v as u32, &near, &users))
+            .map(|v| self.reached(v as u32, &near, users))
             .collect();
         let ranges: Vec<Vec<[u32; 2]>> = lists
             .par_iter()
@@ -129,19 +129,22 @@ impl Hierarchy {
             .collect()
     }
 
-    /// The faces using each vertex, sorted (the corners grouped by their vertex, in order).
-    pub(crate) fn vertex_faces(&self) -> LocalFaces {
-        let t = &self.topology;
-        let (offsets, corners) = group_by_owner(&t.face_vertices, t.vertex_count);
-        let corner_face: Vec<u32> = (0..t.face_count() as u32)
-            .flat_map(|f| std::iter::repeat_n(f, t.face(f).len()))
-            .collect();
-        let faces = corners.iter().map(|&k| corner_face[k as usize]).collect();
-        LocalFaces {
-            offsets,
-            faces,
-            ..LocalFaces::default()
-        }
+    /// The faces using each vertex, sorted (the corners grouped by their vertex, in order):
+    /// a function of the topology, made once, on first use.
+    pub(crate) fn vertex_faces(&self) -> &LocalFaces {
+        self.vertex_faces.get_or_init(|| {
+            let t = &self.topology;
+            let (offsets, corners) = group_by_owner(&t.face_vertices, t.vertex_count);
+            let corner_face: Vec<u32> = (0..t.face_count() as u32)
+                .flat_map(|f| std::iter::repeat_n(f, t.face(f).len()))
+                .collect();
+            let faces = corners.iter().map(|&k| corner_face[k as usize]).collect();
+            LocalFaces {
+                offsets,
+                faces,
+                ..LocalFaces::default()
+            }
+        })
     }
 }
 

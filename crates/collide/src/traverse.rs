@@ -109,16 +109,6 @@ struct Walk<'a, V> {
     visit: &'a V,
 }
 
-/// The node index (face `f`, or `F + i` for record `i`) of a node reference of `h`.
-#[inline(always)]
-fn node_id(h: &Hierarchy, node: u32) -> usize {
-    if node & LEAF != 0 {
-        (node & !LEAF) as usize
-    } else {
-        h.face_count() + node as usize
-    }
-}
-
 /// The number of faces below a node reference of `h`.
 #[inline(always)]
 fn size(h: &Hierarchy, node: u32) -> u32 {
@@ -148,7 +138,7 @@ impl<V: Sync> Walk<'_, V> {
         let (ha, hb) = (self.ha, self.hb);
         if self
             .dirty
-            .is_some_and(|d| !d[node_id(ha, a.0)] && !d[node_id(hb, b.0)])
+            .is_some_and(|d| !d[ha.node_id(a.0)] && !d[hb.node_id(b.0)])
             || !overlap(&a.1, &b.1, self.pad)
         {
             return;
@@ -192,7 +182,7 @@ impl<V: Sync> SelfWalk<'_, V> {
         V: Fn(u32, u32, &mut Vec<T>),
     {
         let h = self.walk.ha;
-        let id = node_id(h, node);
+        let id = h.node_id(node);
         if self.walk.dirty.is_some_and(|d| !d[id])
             || self
                 .cones

@@ -13,6 +13,7 @@ mod build;
 mod refit;
 
 use std::hash::{Hash, Hasher};
+use std::sync::OnceLock;
 
 use parry3d_f64::math::Vector as DVec3;
 use rayon::prelude::*;
@@ -21,6 +22,7 @@ use crate::Point;
 use crate::convert::to_glam;
 use crate::error::CollideError;
 use crate::memory::heap;
+use crate::proximity::LocalFaces;
 use crate::topology::Topology;
 
 use boxes::Boxes;
@@ -52,6 +54,8 @@ pub struct Hierarchy {
     record_spans: Vec<[u32; 2]>,
     /// A hash of `leaf_order`.
     order_fingerprint: u64,
+    /// The faces using each vertex, made on first use (see [`Hierarchy::vertex_faces`]).
+    pub(crate) vertex_faces: OnceLock<LocalFaces>,
     /// CSR over nodes: the directed boundary edges of each node's faces (see [`build`]).
     pub(crate) boundary_offsets: Vec<u32>,
     pub(crate) boundary: Vec<[u32; 2]>,
@@ -91,6 +95,7 @@ impl Hierarchy {
             leaf_first: Vec::new(),
             record_spans: Vec::new(),
             order_fingerprint: 0,
+            vertex_faces: OnceLock::new(),
             boundary_offsets: Vec::new(),
             boundary: Vec::new(),
             boxes: Boxes::default(),
@@ -116,6 +121,10 @@ impl Hierarchy {
             + heap(&self.leaf_order)
             + heap(&self.leaf_first)
             + heap(&self.record_spans)
+            + self
+                .vertex_faces
+                .get()
+                .map_or(0, |t| heap(&t.offsets) + heap(&t.faces))
             + heap(&self.boundary_offsets)
             + heap(&self.boundary)
             + self.boxes.memory_bytes()
@@ -251,11 +260,17 @@ impl Hierarchy {
         {
             node = parent;
         }
-        let faces = self.face_count() as u32;
-        if node & LEAF != 0 {
-            node & !LEAF
+        self.node_id(node) as u32
+    }
+
+    /// The node (face `f`, or `F + i` for record `i`) a reference in the boxes' records names:
+    /// the inverse of [`Self::reference`].
+    #[inline(always)]
+    pub(crate) fn node_id(&self, reference: u32) -> usize {
+        if reference & LEAF != 0 {
+            (reference & !LEAF) as usize
         } else {
-            faces + node
+            self.face_count() + reference as usize
         }
     }
 
