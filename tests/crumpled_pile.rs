@@ -53,8 +53,14 @@ fn a_crumpling_pile_keeps_its_quality_on_every_frame() {
         serde_json::json!({}),
         "the pile failed its quality"
     );
-    let findings = check_findings(&dir.join("out/cloth_control_####.obj"));
+    let findings = check_findings(&dir.join("out/cloth_control_####.obj"), &[]);
     assert!(findings.is_none(), "the control mesh: {findings:?}");
+    let floor = dir.join("out/body_####.obj");
+    let findings = check_findings(
+        &dir.join("out/cloth_####.obj"),
+        &["--against", floor.to_str().unwrap(), "--thickness", "0.005"],
+    );
+    assert!(findings.is_none(), "the written surface: {findings:?}");
     // Stopped and resumed, the pile writes the same bytes: every contact and the friction it
     // carries is in the checkpoint.
     for stop in ["12", "30"] {

@@ -311,7 +311,8 @@ fn default_precision_writes_each_number_as_its_f32() {
         };
         assert!(size(&single) < size(&full_files), "{prefix}");
     }
-    // The simulation and its judgement are the f64s': the same summary, times aside.
+    // The simulation is the f64s' at either precision, and its judgement (of the positions
+    // as written) finds the same: the same summary, times aside.
     let figures = |dir: &Path| {
         let mut s = summary(dir);
         for frame in s["frames"].as_array_mut().unwrap() {

@@ -597,10 +597,11 @@ impl<'a> Output<'a> {
             body,
         } = done;
         let frame = row.frame;
-        let refined = self.cloth.refine(&state.positions);
-        self.cloth.set(&refined)?;
+        let precision = self.scene.output.precision;
+        self.cloth
+            .set(self.cloth.refine(&state.positions), precision)?;
         if let (Some(surface), Some(posed)) = (&mut self.body, body) {
-            surface.set(&posed)?;
+            surface.set(posed, precision)?;
         }
         row.findings = crate::check::inspect(
             self.cloth.hierarchy(),

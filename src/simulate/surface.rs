@@ -120,14 +120,18 @@ impl Surface {
         out
     }
 
-    /// Moves the surface to refined positions `refined` (from [`Self::refine`]) and refits
-    /// the hierarchy.
+    /// Moves the surface to refined positions `refined` (from [`Self::refine`]) as a file
+    /// written at `precision` holds them, and refits the hierarchy: what is checked, and then
+    /// written, is what a reader of the file gets, not the simulation's `f64` before rounding.
     ///
     /// # Errors
     /// When a position is not finite.
-    pub fn set(&mut self, refined: &[Point]) -> Result<()> {
-        self.mesh.set_positions(refined)?;
-        self.hierarchy.refit(refined, 0.0)?;
+    pub fn set(&mut self, mut refined: Vec<Point>, precision: Precision) -> Result<()> {
+        for p in &mut refined {
+            p.coords.apply(|x| *x = precision.round(*x));
+        }
+        self.mesh.set_positions(&refined)?;
+        self.hierarchy.refit(&refined, 0.0)?;
         Ok(())
     }
 

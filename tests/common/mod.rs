@@ -62,9 +62,11 @@ pub fn simulate_scene(dir: &Path, file: &str, scene: &str) -> serde_json::Value 
     serde_json::from_slice(&fs::read(dir.join("out/summary.json")).unwrap()).unwrap()
 }
 
-/// Runs `tailor check` on the frames `pattern` names and returns its report when it finds
-/// anything (or fails), `None` when every frame is clean.
-pub fn check_findings(pattern: &Path) -> Option<String> {
-    let out = tailor(&["check", pattern.to_str().unwrap()]);
+/// Runs `tailor check` on the frames `pattern` names, with its options `options`, and returns
+/// its report when it finds anything (or fails), `None` when every frame is clean.
+pub fn check_findings(pattern: &Path, options: &[&str]) -> Option<String> {
+    let mut args = vec!["check", pattern.to_str().unwrap()];
+    args.extend(options);
+    let out = tailor(&args);
     (out.status.code() != Some(0)).then(|| String::from_utf8_lossy(&out.stdout).into_owned())
 }

@@ -150,6 +150,16 @@ impl Hierarchy {
         self.topology.vertex_count
     }
 
+    /// The largest magnitude of a coordinate in the root's box, as of the last refit (its
+    /// margin and sweep included): a bound on every coordinate of the faces, and so the scale
+    /// of what rounding their positions (to write them as `f32`, say) can move them by.
+    #[must_use]
+    pub fn largest_coordinate(&self) -> f64 {
+        let root = self.boxes.root_box();
+        root.iter()
+            .fold(0.0, |m: f64, &c| m.max(f64::from(c.abs())))
+    }
+
     /// Number of levels above the leaves: about `log2` of the face count.
     #[must_use]
     pub fn depth(&self) -> usize {

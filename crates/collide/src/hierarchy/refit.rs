@@ -127,6 +127,8 @@ mod tests {
         assert_boxes_tight(&h, 0.25);
         let root = h.node_box(h.root());
         assert!((root.maxs - DVec3::new(8.25, 1.25, 16.25)).length() < 1e-5);
+        // The largest coordinate is the root's far corner in z (16 plus the margin).
+        assert!((h.largest_coordinate() - 16.25).abs() < 1e-5);
     }
 
     #[test]
@@ -142,6 +144,13 @@ mod tests {
         let root = h.node_box(h.root());
         // Loosened by the contact tolerance: 2e-10 of the face's extents (1 + 1 + 3).
         assert!((root.mins.z + 3.0).abs() < 1e-6 && root.maxs.z.abs() < 1e-8);
+        // An end twice as far out reaches x = 8 (and z = -6): the sweep counts, not only the
+        // start (x = 4).
+        h.refit_swept(&p, &end.iter().map(|q| q * 2.0).collect::<Vec<_>>(), 0.0)
+            .unwrap();
+        assert!((h.largest_coordinate() - 8.0).abs() < 1e-5);
+        h.refit(&p, 0.0).unwrap();
+        assert!((h.largest_coordinate() - 4.0).abs() < 1e-5);
     }
 
     #[test]

@@ -103,6 +103,24 @@ pub enum Precision {
     Full,
 }
 
+impl Precision {
+    /// What a reader holds of `x` written at this precision: at [`Precision::Single`] the
+    /// `f32` its text reads back as (`x` rounded to the nearest `f32`, as a renderer reading
+    /// into `f32` holds it; `x` itself where that overflows, as it is written in full); at
+    /// [`Precision::Full`] `x`. For checking a file before it is written. A reader into `f64`
+    /// holds the text's shortest decimal, within half an `f32` step of this.
+    #[must_use]
+    pub fn round(self, x: f64) -> f64 {
+        self.single(x).map_or(x, f64::from)
+    }
+
+    /// `x` as the `f32` its text is written from, or `None` when it is written as an `f64`.
+    fn single(self, x: f64) -> Option<f32> {
+        let single = x as f32;
+        (self == Self::Single && !(x.is_finite() && single.is_infinite())).then_some(single)
+    }
+}
+
 named_option!(
     Precision,
     "precision",

@@ -300,10 +300,9 @@ fn push_numbers(line: &mut Vec<u8>, keyword: &[u8], values: &[f64], precision: P
 /// 1e-6..1e13 for `f32`) are written with an exponent (`1e-7`, `2.5e20`), never as hundreds of
 /// digits.
 pub(super) fn shortest(x: f64, precision: Precision, buffer: &mut ryu::Buffer) -> &str {
-    let single = x as f32;
-    let text = match precision {
-        Precision::Single if !(x.is_finite() && single.is_infinite()) => buffer.format(single),
-        _ => buffer.format(x),
+    let text = match precision.single(x) {
+        Some(single) => buffer.format(single),
+        None => buffer.format(x),
     };
     text.strip_suffix(".0").unwrap_or(text)
 }
@@ -510,6 +509,45 @@ mod tests {
         }
         // Below f32's range a value rounds to zero, as an f32 reader would make it.
         assert_eq!(single(1e-300), "0");
+    }
+
+    #[test]
+    fn round_gives_what_a_reader_of_the_text_holds() {
+        let edges = [
+            0.1,
+            -1.0 / 3.0,
+            1e39,
+            -3e300,
+            1e-300,
+            16_777_217.0,
+            f64::MAX,
+        ];
+        let random = bits(100_000).map(f64::from_bits);
+        let unit = bits(100_000).map(|b| (b >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0);
+        for x in edges
+            .into_iter()
+            .chain(random)
+            .chain(unit)
+            .filter(|x| x.is_finite())
+        {
+            for precision in [Precision::Single, Precision::Full] {
+                let text = shortest(x, precision, &mut ryu::Buffer::new()).to_owned();
+                let wide: f64 = text.parse().unwrap();
+                let narrow: f32 = text.parse().unwrap();
+                let back = match precision {
+                    Precision::Single if narrow.is_finite() => f64::from(narrow),
+                    _ => wide,
+                };
+                let rounded = precision.round(x);
+                assert_eq!(rounded.to_bits(), back.to_bits(), "{x:e} at {precision:?}");
+                // An f64 reader is within half an f32 step of it (the subnormals' below f32's
+                // normal range).
+                let step = (f64::from(f32::EPSILON) * rounded.abs())
+                    .max(f64::from(f32::from_bits(1)))
+                    / 2.0;
+                assert!((wide - rounded).abs() <= step, "{x:e} at {precision:?}");
+            }
+        }
     }
 
     /// The text of `{}`, or `{:e}` outside 1e-5..1e16 (where `{}` writes hundreds of digits).
