@@ -337,10 +337,22 @@ fn line(what: &str, f: &Findings, deepest: Option<[f64; 3]>, against: bool) -> S
         format!(" at ({x:.3}, {y:.3}, {z:.3})")
     });
     format!(
-        "{what}: {} penetrating vertices (deepest {:.2} mm{at}), {crossings}",
+        "{what}: {} penetrating vertices (deepest {}{at}), {crossings}",
         f.penetrating_vertices,
-        f.max_penetration * 1e3
+        depth(f.max_penetration)
     )
+}
+
+/// A penetration depth `m` (metres) for people: in millimetres to two decimals, or in
+/// micrometres to three where that would read 0.00 mm (rounding to `f32` leaves points
+/// nanometres inside the thickness, and "0.00 mm" for a failing frame says nothing).
+#[must_use]
+pub fn depth(m: f64) -> String {
+    if m == 0.0 || m.abs() >= 5e-6 {
+        format!("{:.2} mm", m * 1e3)
+    } else {
+        format!("{:.3} µm", m * 1e6)
+    }
 }
 
 /// A hierarchy kept across frames while the topology stays the same.
@@ -376,6 +388,16 @@ impl Reuse {
 mod tests {
     use super::*;
     use tailor_cloth::shapes::{centred_sheet, sphere};
+
+    #[test]
+    fn depths_read_in_millimetres_or_below_them_in_micrometres() {
+        assert_eq!(depth(0.0), "0.00 mm");
+        assert_eq!(depth(0.1), "100.00 mm");
+        assert_eq!(depth(2.5e-5), "0.03 mm");
+        // A point rounded nanometres inside the thickness: not "0.00 mm".
+        assert_eq!(depth(2.4e-8), "0.024 µm");
+        assert_eq!(depth(4.9e-6), "4.900 µm");
+    }
 
     /// A sheet sinks through a ball that moves sideways, over frames whose steps shrink and
     /// grow: the clearances measured again only where a point may have come within the

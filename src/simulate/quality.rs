@@ -258,9 +258,9 @@ impl fmt::Display for Failure {
             )?,
             Kind::Penetration => write!(
                 f,
-                "cloth inside the body or within its thickness in frames {frames} (deepest \
-                 {:.4} m at frame {at}",
-                self.worst
+                "cloth inside the body or within its thickness in frames {frames} (deepest {} \
+                 at frame {at}",
+                crate::check::depth(self.worst)
             )?,
             Kind::SelfIntersection => write!(
                 f,
@@ -436,7 +436,7 @@ mod tests {
         warns(
             penetration,
             &[
-                "deepest 0.0200 m at frame 4, vertex 0) in group \"panel\" and at vertex 2 (",
+                "deepest 20.00 mm at frame 4, vertex 0) in group \"panel\" and at vertex 2 (",
                 "vertex 2 rests at (2.000, 0.000, 0.000)",
             ],
         );
