@@ -33,7 +33,7 @@ use nalgebra::Vector3;
 use tailor_cloth::shapes;
 use tailor_subdiv::Point;
 
-use common::{check_findings, scratch, simulate_scene, write_mesh};
+use common::{check_findings, check_written, scratch, simulate_scene, write_mesh};
 
 mod common;
 
@@ -97,11 +97,7 @@ fn assert_clean_at(n: u32, [substeps, level, frames]: [u32; 3], nudge: f64) {
     // The files as a user checks them: read back from their text, against the body written
     // beside them. A point the run left exactly at the thickness, rounded to the text's
     // `f32`, lay nanometres inside it on 4 of the 64² drape's 61 frames at one substep.
-    let body = dir.join("body_####.obj");
-    let findings = check_findings(
-        &dir.join("cloth_####.obj"),
-        &["--against", body.to_str().unwrap(), "--thickness", "0.005"],
-    );
+    let findings = check_written(&dir, 0.005);
     assert!(
         findings.is_none(),
         "the {n}² drape at {substeps} substeps writes files that `tailor check` finds wanting \

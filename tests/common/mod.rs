@@ -70,3 +70,19 @@ pub fn check_findings(pattern: &Path, options: &[&str]) -> Option<String> {
     let out = tailor(&args);
     (out.status.code() != Some(0)).then(|| String::from_utf8_lossy(&out.stdout).into_owned())
 }
+
+/// [`check_findings`] on the written surface `dir/cloth_####.obj` against the body written
+/// beside it, `dir/body_####.obj`, within `thickness`: the files as a user checks them.
+pub fn check_written(dir: &Path, thickness: f64) -> Option<String> {
+    let body = dir.join("body_####.obj");
+    let thickness = thickness.to_string();
+    check_findings(
+        &dir.join("cloth_####.obj"),
+        &[
+            "--against",
+            body.to_str().unwrap(),
+            "--thickness",
+            &thickness,
+        ],
+    )
+}

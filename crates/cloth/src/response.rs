@@ -33,11 +33,11 @@
 //!    limiter does not push them in for the projection to push back out.
 //! 3. **Self repulsion** ([`Collisions::repel`]): for every vertex within the thickness of a
 //!    face of the garment, and every edge within it of another edge, an impulse that stops the
-//!    pair approaching and starts separating it
-//!    by a tenth of the overlap per step (Bridson et al. §7.1), except the pairs the rest shape
-//!    itself puts that near (see the `self_collision` module). Stopping an
-//!    approach at once strains the edges around the pair, so strain limiting runs again with
-//!    the vertices it moved a hundred times heavier: the cloth around them takes up the slack.
+//!    pair approaching and starts separating it by a tenth of the overlap per step (Bridson
+//!    et al. §7.1), except the pairs the rest shape itself puts that near (see the
+//!    `self_collision` module). Stopping an approach at once strains the edges around the
+//!    pair, so strain limiting runs again with the vertices it moved a hundred times heavier:
+//!    the cloth around them takes up the slack.
 //! 4. **Self impacts, the fail-safe** ([`Collisions::impulse_round`],
 //!    [`Collisions::impact_zones`]): continuous vertex–triangle and edge–edge tests over the
 //!    straight-line motion; each impact gets an inelastic impulse at the time of contact, each
@@ -77,9 +77,9 @@
 //!    moved since the last round (a zone translates whole and strains the edges from it to
 //!    the cloth around: up to 150% on a crumpled pile, left for the next substep, and written
 //!    when the zones came in a frame's last substep: 19% and 32% on a frame of two piles), the
-//!    zones' vertices held, and the control mesh's self impacts then check what that moved. The control mesh can be free of crossings while the
-//!    surface it defines is not: where a hem crumples, the refined faces of two folds crossed
-//!    on 12 of 61 frames of the 64² drape. And the refined pass and the lift move control
+//!    zones' vertices held, and the control mesh's self impacts then check what that moved.
+//!    The control mesh can be free of crossings while the surface it defines is not: where a
+//!    hem crumples, the refined faces of two folds crossed on 12 of 61 frames of the 64² drape. And the refined pass and the lift move control
 //!    points the control mesh's tests have not seen: without the control mesh's tests in
 //!    these rounds it ended crossed on 50 of 61 frames of the 128² drape, and at one substep a
 //!    frame the next substeps could not undo it and the 64² drape tangled (47% strain, the
