@@ -25,8 +25,10 @@
 //! collision pass, [`StrainLimiter::limit_around`] runs the same sweeps with the vertices the
 //! pass moved a hundred times heavier, so the cloth around them takes up the strain.
 
+use tailor_subdiv::Point;
 use tailor_subdiv::csr::{Csr, group_into};
 
+use crate::energy::Vec3;
 use crate::model::Springs;
 use crate::substep::{Floor, HELD_MASS, Substep};
 
@@ -49,6 +51,8 @@ pub(crate) struct StrainLimiter {
     incident: Csr,
     /// Edges by breadth-first depth from the sources, then the unreached ones.
     order: Vec<u32>,
+    /// Each edge's place in `order`.
+    place: Vec<u32>,
     depth: Vec<u32>,
     /// The vertices `order` starts from: fixed ones, and after a collision pass the ones it
     /// moved.
@@ -59,6 +63,12 @@ pub(crate) struct StrainLimiter {
     /// of the edges by depth.
     queue: Vec<u32>,
     starts: Vec<u32>,
+    /// The places in `order` of the edges a sweep visits.
+    pending: Pending,
+    /// The positions the last call ended with, and its limit: an edge not pending then was
+    /// within that limit at those positions.
+    settled: Vec<Point>,
+    settled_limit: f64,
 }
 
 impl StrainLimiter {
@@ -68,21 +78,25 @@ impl StrainLimiter {
         Self {
             incident: Csr::group_by(vertex_count, incident),
             order: (0..springs.verts.len() as u32).collect(),
+            place: (0..springs.verts.len() as u32).collect(),
             depth: vec![UNREACHED; vertex_count],
             sources: vec![false; vertex_count],
             weights: Vec::with_capacity(vertex_count),
             queue: Vec::with_capacity(vertex_count),
             starts: Vec::with_capacity(vertex_count + 3),
+            pending: Pending::default(),
+            settled: Vec::new(),
+            settled_limit: 0.0,
         }
     }
 
     /// Orders the edges outwards from the vertices `source` flags (breadth first, a fixed
-    /// order), when that set changed since the last call.
-    fn order_from(&mut self, springs: &Springs, source: impl Fn(usize) -> bool) {
+    /// order), when that set changed since the last call; returns whether it did.
+    fn order_from(&mut self, springs: &Springs, source: impl Fn(usize) -> bool) -> bool {
         let n = self.depth.len();
         let same = (0..n).all(|v| self.sources[v] == source(v));
         if same && self.order.len() == springs.verts.len() {
-            return;
+            return false;
         }
         for (v, f) in self.sources.iter_mut().enumerate() {
             *f = source(v);
@@ -114,6 +128,11 @@ impl StrainLimiter {
             (if d == UNREACHED { n as u32 } else { d }, e as u32)
         });
         group_into(n + 1, by_depth, &mut self.starts, &mut self.order);
+        self.place.resize(self.order.len(), 0);
+        for (k, &e) in self.order.iter().enumerate() {
+            self.place[e as usize] = k as u32;
+        }
+        true
     }
 
     /// Brings every edge of `springs` within `limit` (a fraction, e.g. 0.1) of its rest
@@ -137,6 +156,14 @@ impl StrainLimiter {
 
     /// The sweeps of [`Self::limit`], the first outwards from the fixed vertices and the ones
     /// `moved` flags, if any.
+    ///
+    /// A sweep visits only the edges [`Pending`] holds: an edge a visit finds within the
+    /// limit leaves it, and every edge at a vertex that moves comes back, so a skipped edge
+    /// is one whose ends have not moved since it was found within the limit, which its visit
+    /// would find again. The positions the last call ended with are kept, and a call starts
+    /// with the edges at the vertices that have moved since (all of them when the order
+    /// changed). The corrections, their order and so the bytes are those of visiting every
+    /// edge; most sweeps after the first touch a few hundred edges of thousands.
     fn sweep(
         &mut self,
         springs: &Springs,
@@ -153,36 +180,81 @@ impl StrainLimiter {
             ..
         } = m;
         let h = *h;
-        if let Some(moved) = moved {
-            self.order_from(springs, |v| inverse_mass[v] == 0.0 || moved[v]);
+        let reordered = if let Some(moved) = moved {
+            self.order_from(springs, |v| inverse_mass[v] == 0.0 || moved[v])
         } else {
-            self.order_from(springs, |v| inverse_mass[v] == 0.0);
+            self.order_from(springs, |v| inverse_mass[v] == 0.0)
+        };
+        let Self {
+            incident,
+            order,
+            place,
+            depth,
+            pending,
+            settled,
+            settled_limit,
+            ..
+        } = self;
+        let edges = order.len();
+        if reordered || settled.len() != x.len() || *settled_limit != limit {
+            pending.fill(edges);
+        } else {
+            for (v, (now, then)) in x.iter().zip(settled.iter()).enumerate() {
+                if now != then {
+                    pending.insert_all(incident.row(v), place);
+                }
+            }
         }
-        let edges = self.order.len();
         let inner = limit * (1.0 - SLACK);
         let mut corrections = 0;
         for sweep in 0..SWEEPS {
+            let forward = sweep % 2 == 0;
             let mut changed = false;
-            for k in 0..edges {
-                let e = self.order[if sweep % 2 == 0 { k } else { edges - 1 - k }] as usize;
+            // The next place to look from; what a visit brings back ahead of it is visited in
+            // this sweep, what it brings back behind in the next.
+            let mut cursor = if forward {
+                Some(0)
+            } else {
+                edges.checked_sub(1)
+            };
+            loop {
+                let found = cursor.and_then(|c| {
+                    if forward {
+                        pending.first_from(c)
+                    } else {
+                        pending.last_to(c)
+                    }
+                });
+                let Some(k) = found else { break };
+                cursor = if forward {
+                    Some(k + 1)
+                } else {
+                    k.checked_sub(1)
+                };
+                let e = order[k] as usize;
                 let ([a, b], rest) = (springs.verts[e], springs.rest[e]);
                 let (a, b) = (a as usize, b as usize);
                 let (mut wa, mut wb) = (inverse_mass[a], inverse_mass[b]);
-                if sweep == 0 && self.depth[a] != self.depth[b] {
+                if sweep == 0 && depth[a] != depth[b] {
                     // Shock propagation: the end nearer the sources holds.
-                    if self.depth[a] < self.depth[b] {
+                    if depth[a] < depth[b] {
                         wa = 0.0;
                     } else {
                         wb = 0.0;
                     }
                 }
+                // An edge neither end of which may move now stays to be visited again.
                 if wa + wb == 0.0 {
                     continue;
                 }
                 let d = x[b] - x[a];
                 let length = d.norm();
                 let (short, long) = ((1.0 - limit) * rest, (1.0 + limit) * rest);
-                if (short..=long).contains(&length) || length == 0.0 {
+                if (short..=long).contains(&length) {
+                    pending.remove(k);
+                    continue;
+                }
+                if length == 0.0 {
                     continue;
                 }
                 let goal = length.clamp((1.0 - inner) * rest, (1.0 + inner) * rest);
@@ -211,6 +283,13 @@ impl StrainLimiter {
                 v[a] += da / h;
                 x[b] += db;
                 v[b] += db / h;
+                // The edge itself comes back with its ends: a floor may have kept it past
+                // the limit.
+                for (end, delta) in [(a, da), (b, db)] {
+                    if delta != Vec3::zeros() {
+                        pending.insert_all(incident.row(end), place);
+                    }
+                }
                 changed = true;
                 corrections += 1;
             }
@@ -218,6 +297,9 @@ impl StrainLimiter {
                 break;
             }
         }
+        settled.clear();
+        settled.extend_from_slice(x);
+        *settled_limit = limit;
         corrections
     }
 
@@ -253,12 +335,66 @@ impl StrainLimiter {
     }
 }
 
+/// A set of places `0..n` in the edge order, as bits, walked forwards or backwards while it
+/// changes.
+#[derive(Clone, Debug, Default)]
+struct Pending {
+    words: Vec<u64>,
+}
+
+impl Pending {
+    /// Every place `0..n`.
+    fn fill(&mut self, n: usize) {
+        self.words.clear();
+        self.words.resize(n.div_ceil(64), u64::MAX);
+        if !n.is_multiple_of(64) {
+            let last = self.words.len() - 1;
+            self.words[last] = (1 << (n % 64)) - 1;
+        }
+    }
+
+    /// Adds the places of the edges `edges` (`place` maps an edge to its place).
+    fn insert_all(&mut self, edges: &[u32], place: &[u32]) {
+        for &e in edges {
+            let k = place[e as usize] as usize;
+            self.words[k / 64] |= 1 << (k % 64);
+        }
+    }
+
+    fn remove(&mut self, k: usize) {
+        self.words[k / 64] &= !(1 << (k % 64));
+    }
+
+    /// The first place at or after `k`.
+    fn first_from(&self, k: usize) -> Option<usize> {
+        let mut w = k / 64;
+        let mut bits = *self.words.get(w)? & (u64::MAX << (k % 64));
+        loop {
+            if bits != 0 {
+                return Some(w * 64 + bits.trailing_zeros() as usize);
+            }
+            w += 1;
+            bits = *self.words.get(w)?;
+        }
+    }
+
+    /// The last place at or before `k`.
+    fn last_to(&self, k: usize) -> Option<usize> {
+        let mut w = k / 64;
+        let mut bits = self.words[w] & (u64::MAX >> (63 - k % 64));
+        loop {
+            if bits != 0 {
+                return Some(w * 64 + 63 - bits.leading_zeros() as usize);
+            }
+            w = w.checked_sub(1)?;
+            bits = self.words[w];
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use tailor_subdiv::Point;
-
     use super::*;
-    use crate::energy::Vec3;
 
     /// Runs the limiter at 10% on a substep of 0.01 s ending at `x` with zero velocities,
     /// with `floors` (none if empty), after a collision pass that `moved` the
@@ -305,6 +441,109 @@ mod tests {
             x.push(x[i] + Vec3::new(l, 0.0, 0.0));
         }
         (springs, x)
+    }
+
+    /// A 10 × 10 grid of unit cells with one diagonal each, every vertex displaced by up to
+    /// a quarter of a cell (a fixed pseudo-random sequence): most edges past 10%.
+    fn jumbled_grid() -> (Springs, Vec<Point>) {
+        let side = 10;
+        let at = |i: u32, j: u32| Point::new(f64::from(i), f64::from(j), 0.0);
+        let mut springs = Springs::default();
+        for j in 0..side {
+            for i in 0..side {
+                let v = j * side + i;
+                let mut link = |w: u32, rest: f64| {
+                    springs.verts.push([v, w]);
+                    springs.rest.push(rest);
+                };
+                if i + 1 < side {
+                    link(v + 1, 1.0);
+                }
+                if j + 1 < side {
+                    link(v + side, 1.0);
+                }
+                if i + 1 < side && j + 1 < side {
+                    link(v + side + 1, 2f64.sqrt());
+                }
+            }
+        }
+        let mut seed = 12345_u64;
+        let mut jitter = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let x = (0..side * side)
+            .map(|v| at(v % side, v / side) + Vec3::new(jitter(), jitter(), jitter()) * 0.5)
+            .collect();
+        (springs, x)
+    }
+
+    #[test]
+    fn a_limiter_kept_from_call_to_call_gives_the_bytes_of_a_new_one() {
+        // The kept limiter skips the edges it found within the limit whose ends have not
+        // moved since; a new one visits every edge. Between the calls vertices move, masses
+        // change (which reorders the edges) and the limit changes.
+        let (springs, mut kept_x) = jumbled_grid();
+        let n = kept_x.len();
+        let mut fresh_x = kept_x.clone();
+        let (mut kept_v, mut fresh_v) = (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n]);
+        let mut inverse_mass = vec![1.0; n];
+        inverse_mass[0] = 0.0;
+        let mut floors = vec![Floor::NONE; n];
+        floors[55] = Floor {
+            normal: Vec3::z(),
+            offset: kept_x[55].z - 0.01,
+        };
+        let mut kept = StrainLimiter::new(&springs, n);
+        let nudge = |x: &mut [Point], v: usize, k: f64| x[v] += Vec3::new(0.3 * k, -0.2, 0.1);
+        let mut moved = vec![false; n];
+        let mut limit = 0.1;
+        for call in 0..9 {
+            // Calls 1, 3 and 8 find the edges to visit from the vertices moved since.
+            match call {
+                2 => {
+                    for v in [12, 13, 47, 90] {
+                        moved[v] = true;
+                    }
+                }
+                4 => moved.fill(false),
+                6 => inverse_mass[99] = 0.0,
+                7 => limit = 0.05,
+                _ => {}
+            }
+            if call != 5 {
+                for v in [3 * call + 7, 50 + call, 81 - call] {
+                    nudge(&mut kept_x, v, call as f64);
+                    nudge(&mut fresh_x, v, call as f64);
+                }
+            }
+            let x0 = kept_x.clone();
+            let mut both = [
+                (&mut kept_x, &mut kept_v, &mut kept),
+                (
+                    &mut fresh_x,
+                    &mut fresh_v,
+                    &mut StrainLimiter::new(&springs, n),
+                ),
+            ]
+            .map(|(x, v, limiter)| {
+                let mut m = Substep {
+                    h: 0.01,
+                    x0: &x0,
+                    x,
+                    v,
+                    inverse_mass: &inverse_mass,
+                };
+                limiter.limit_around(&springs, limit, &mut m, &floors, &moved)
+            });
+            both.sort_unstable();
+            assert!(both[0] > 0 || call == 5, "call {call}: nothing to correct");
+            assert_eq!(both[0], both[1], "call {call}: corrections");
+            assert_eq!(kept_x, fresh_x, "call {call}: positions");
+            assert_eq!(kept_v, fresh_v, "call {call}: velocities");
+        }
     }
 
     #[test]
