@@ -63,7 +63,15 @@ pub(crate) struct Obstacle {
     deep: Vec<usize>,
     deep_points: Vec<Point>,
     deep_answers: Vec<Option<Closest>>,
+    /// The vertices a projection looks at, their positions and what it finds.
+    asked: Vec<usize>,
+    asked_points: Vec<Point>,
     projected: Vec<Option<Closest>>,
+    /// Per vertex, whether the last projection of the substep found it at least half the
+    /// thickness clear of the body (or nothing within the thickness) at `checked`; and that
+    /// thickness. Empty when no projection has run since the body or `checked` moved.
+    clear: Vec<bool>,
+    clear_thickness: f64,
 }
 
 impl Obstacle {
@@ -87,7 +95,11 @@ impl Obstacle {
             deep: Vec::new(),
             deep_points: Vec::new(),
             deep_answers: Vec::new(),
+            asked: Vec::new(),
+            asked_points: Vec::new(),
             projected: Vec::new(),
+            clear: Vec::new(),
+            clear_thickness: 0.0,
         })
     }
 
@@ -149,6 +161,7 @@ impl Obstacle {
         for ((v, a), b) in self.velocity.iter_mut().zip(a).zip(b) {
             *v = (b - a) / h;
         }
+        self.clear.clear();
     }
 
     /// The body's velocity at a closest point.
@@ -309,6 +322,7 @@ impl Obstacle {
         }
         self.checked.clear();
         self.checked.extend_from_slice(m.x);
+        self.clear.clear();
         Ok(moved)
     }
 
@@ -322,38 +336,64 @@ impl Obstacle {
     /// vertices 7 mm inside the sphere from frame 15 on). So a vertex that has moved farther
     /// than the thickness since the continuous pass or the last projection left it outside is
     /// sought within how far it moved, which reaches its closest point however deep it went.
+    /// A vertex an earlier projection of the substep found clear, and that has not moved
+    /// since, is not sought again: the body has not moved either, so the answer would be the
+    /// same.
     pub fn project(&mut self, thickness: f64, m: &mut Substep) -> Result<u32, CollideError> {
         self.hierarchy.refit(&self.substep[1], 0.0)?;
+        let n = m.x.len();
+        let checked = self.checked.len() == n;
+        // A vertex the last projection of the substep found clear, and that has not moved
+        // since, would be found clear again.
+        let known = checked && self.clear.len() == n && self.clear_thickness == thickness;
+        if !known {
+            self.clear.clear();
+            self.clear.resize(n, false);
+            self.clear_thickness = thickness;
+        }
+        self.asked.clear();
+        self.asked_points.clear();
+        for (i, x) in m.x.iter().enumerate() {
+            if !(known && self.clear[i] && *x == self.checked[i]) {
+                self.asked.push(i);
+                self.asked_points.push(*x);
+            }
+        }
         self.hierarchy
-            .closest_points_into(m.x, thickness, &mut self.projected)?;
-        if self.checked.len() == m.x.len() {
+            .closest_points_into(&self.asked_points, thickness, &mut self.projected)?;
+        if checked {
             self.deep.clear();
             let mut reach = 0.0_f64;
-            for (i, (x, checked)) in m.x.iter().zip(&self.checked).enumerate() {
-                let moved = (x - checked).norm();
+            for (k, &i) in self.asked.iter().enumerate() {
+                let moved = (m.x[i] - self.checked[i]).norm();
                 if moved > thickness {
-                    self.deep.push(i);
+                    self.deep.push(k);
                     reach = reach.max(moved);
                 }
             }
             if !self.deep.is_empty() {
                 self.deep_points.clear();
-                self.deep_points.extend(self.deep.iter().map(|&i| m.x[i]));
+                self.deep_points
+                    .extend(self.deep.iter().map(|&k| self.asked_points[k]));
                 self.hierarchy.closest_points_into(
                     &self.deep_points,
                     reach,
                     &mut self.deep_answers,
                 )?;
-                for (&i, answer) in self.deep.iter().zip(&self.deep_answers) {
-                    self.projected[i] = *answer;
+                for (&k, answer) in self.deep.iter().zip(&self.deep_answers) {
+                    self.projected[k] = *answer;
                 }
             }
         }
         let floor = 0.5 * thickness;
         let mut moved = 0;
-        for (i, c) in self.projected.iter().enumerate() {
-            let Some(c) = c else { continue };
+        for (&i, c) in self.asked.iter().zip(&self.projected) {
+            let Some(c) = c else {
+                self.clear[i] = true;
+                continue;
+            };
             let (normal, distance) = away_from(m.x[i], c);
+            self.clear[i] = distance >= floor;
             if distance >= floor || m.inverse_mass[i] == 0.0 {
                 continue;
             }
@@ -495,6 +535,67 @@ mod tests {
             assert!(m.v[i].y >= 0.0, "vertex {i} still moves in: {}", m.v[i]);
         }
         assert_eq!(m.x[8].y, 0.04);
+    }
+
+    /// A second projection in the substep skips the vertices the first found clear and that
+    /// have not moved since, and ends as one that looks at every vertex.
+    #[test]
+    fn a_projection_again_gives_the_bytes_of_a_full_one() {
+        let mut obstacle = floor();
+        let thickness = 0.005;
+        let h = 0.01;
+        obstacle.begin_substep(0.0, h);
+        // A 5 × 5 sheet 4 mm above the floor (within the thickness, outside its half).
+        let sheet = crate::shapes::centred_sheet(5, 0.2);
+        let x0: Vec<Point> = sheet
+            .positions()
+            .iter()
+            .map(|p| p + Vec3::y() * 0.004)
+            .collect();
+        let mut cloth =
+            Hierarchy::build(&x0, sheet.face_offsets(), sheet.face_vertices()).expect("a sheet");
+        let mut x = x0.clone();
+        let mut v = vec![Vec3::y(); x.len()];
+        let inverse_mass = vec![1.0; x.len()];
+        let mut m = Substep {
+            h,
+            x0: &x0,
+            x: &mut x,
+            v: &mut v,
+            inverse_mass: &inverse_mass,
+        };
+        obstacle
+            .resolve_impacts(&mut cloth, thickness, &mut m)
+            .expect("finite");
+        m.x[3].y = -0.001;
+        assert_eq!(obstacle.project(thickness, &mut m), Ok(1));
+        // Then passes move vertices: into the body, deep into it, within half the
+        // thickness, and along it; the rest stay where the projection found them clear.
+        // (The cloth's velocities are all up, so a vertex's velocity shows whether the
+        // projection stopped its approach.)
+        m.x[7].y = -0.002;
+        m.x[12].y = -0.03;
+        m.x[18].y = 0.001;
+        m.x[20].x += 0.001;
+        let mut full = obstacle.clone();
+        full.clear.clear();
+        let (mut x_full, mut v_full) = (m.x.to_vec(), m.v.to_vec());
+        let mut m_full = Substep {
+            h,
+            x0: &x0,
+            x: &mut x_full,
+            v: &mut v_full,
+            inverse_mass: &inverse_mass,
+        };
+        let again = obstacle.project(thickness, &mut m);
+        assert_eq!(again, Ok(3));
+        assert_eq!(full.project(thickness, &mut m_full), again);
+        assert_eq!(m.x, m_full.x);
+        assert_eq!(m.v, m_full.v);
+        // Vertex 3, put out by the first projection, is looked at again: where it was put is
+        // not known to be clear.
+        assert_eq!(obstacle.asked, [3, 7, 12, 18, 20]);
+        assert_eq!(full.asked.len(), 25);
     }
 
     #[test]
