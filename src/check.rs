@@ -8,6 +8,12 @@
 //! the same pair): here by the vertex's position and the faces' order in the file; `tailor
 //! simulate` maps them back to the garment it simulated.
 //!
+//! A file is judged at the positions a renderer holds: one whose every coordinate is the
+//! shortest text of an `f32` (as `tailor simulate` writes at its default precision) is read
+//! as an `f32` reader reads it, each coordinate its nearest `f32`
+//! (`tailor_subdiv::obj::Precision::of_text`); the run's own check judges those same values,
+//! so the two agree to the bit. A file with more digits is read in `f64`.
+//!
 //! Inside/outside uses the body's pseudo-normals (`tailor_collide::Hierarchy::signed_distances`)
 //! and needs a closed body; an open body is checked by distance only. Hierarchies are built for
 //! the first frame and refit for every later frame of the same topology, and a frame measures
@@ -22,6 +28,7 @@ use anyhow::{Context, Result, bail};
 use nalgebra::Point3;
 use serde_json::json;
 use tailor_collide::{DistanceBounds, Hierarchy};
+use tailor_subdiv::obj::Precision;
 
 use crate::output;
 use crate::polymesh_obj::{self, PolyMesh};
@@ -128,6 +135,20 @@ impl Findings {
     }
 }
 
+/// The mesh of OBJ file `path` as a renderer holds it (when every coordinate is the shortest
+/// text of an `f32`, each rounded to that `f32`; see the module docs), and its positions as
+/// the text writes them, for naming a vertex by where it is in the file.
+fn read_as_rendered(path: &Path) -> Result<(PolyMesh, Vec<Point3<f64>>)> {
+    let mut mesh = polymesh_obj::read(path)?;
+    let written = mesh.positions.clone();
+    let coordinates = written.iter().flat_map(|p| p.coords.iter().copied());
+    let precision = Precision::of_text(coordinates);
+    for p in &mut mesh.positions {
+        p.coords.apply(|x| *x = precision.round(*x));
+    }
+    Ok((mesh, written))
+}
+
 /// Runs `tailor check`: exit 0 clean, 1 found, 2 cannot check.
 ///
 /// # Errors
@@ -162,11 +183,11 @@ fn check(args: &Args) -> Result<bool> {
     let mut rows = Vec::with_capacity(frames.len());
     let mut total = Findings::default();
     for (frame, cloth_path, body_path) in &frames {
-        let cloth_mesh = polymesh_obj::read(cloth_path)?;
+        let (cloth_mesh, written) = read_as_rendered(cloth_path)?;
         let cloth_h = cloth.hierarchy(&cloth_mesh, cloth_path)?;
         let body_h = match body_path {
             Some(body_path) => {
-                let body_mesh = polymesh_obj::read(body_path)?;
+                let (body_mesh, _) = read_as_rendered(body_path)?;
                 let body_h = body.hierarchy(&body_mesh, body_path)?;
                 if !body_h.is_closed() && !warned_open {
                     eprintln!(
@@ -191,7 +212,7 @@ fn check(args: &Args) -> Result<bool> {
         .with_context(|| format!("checking {}", cloth_path.display()))?;
         let deepest = found
             .deepest_vertex
-            .and_then(|v| cloth_mesh.positions.get(v as usize))
+            .and_then(|v| written.get(v as usize))
             .map(|p| [p.x, p.y, p.z]);
         total.penetrating_vertices += found.penetrating_vertices;
         total.max_penetration = total.max_penetration.max(found.max_penetration);

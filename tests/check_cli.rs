@@ -98,7 +98,9 @@ fn penetrating_cloth_exits_1_with_counts() {
     let args: [&Path; 3] = [&cloth, Path::new("--against"), &body];
     let r = report(&dir, &args, &["--thickness", "0"], 1);
     assert_eq!(r["total"]["penetrating_vertices"], 4);
-    assert!((r["total"]["max_penetration"].as_f64().unwrap() - 0.1).abs() < 1e-12);
+    // The file's short decimals are f32 text, read as a renderer holds them: 0.9 and the
+    // cube's 1 are 0.1 apart to an f32 step.
+    assert!((r["total"]["max_penetration"].as_f64().unwrap() - 0.1).abs() < 1e-7);
     assert_eq!(r["frames"][0]["penetrating_vertices"], 4);
     assert_eq!(
         r["frames"][0]["deepest_point"],
@@ -108,13 +110,46 @@ fn penetrating_cloth_exits_1_with_counts() {
     // 0.4 away).
     let r = report(&dir, &args, &["--thickness", "0.05"], 1);
     assert_eq!(r["total"]["penetrating_vertices"], 4);
-    assert!((r["total"]["max_penetration"].as_f64().unwrap() - 0.15).abs() < 1e-12);
+    assert!((r["total"]["max_penetration"].as_f64().unwrap() - 0.15).abs() < 1e-7);
     let out = tailor(&[cloth.to_str().unwrap(), "--against", body.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout.contains("4 penetrating vertices (deepest 100.00 mm at (0.200, 0.300, 0.900))"),
         "{stdout}"
     );
+}
+
+/// A file written as `f32` text is judged as a renderer reads it, each coordinate its nearest
+/// `f32`; one written with more digits in `f64`. Over the top of a box at z = 0, at thickness
+/// 0.005, a vertex written as 0.005 holds 0.004999999888241291 in an `f32`, a tenth of a
+/// nanometre inside; one written as 0.0050000001 is read as that `f64`, outside.
+#[test]
+fn a_file_of_f32_text_is_judged_as_f32() {
+    let dir = scratch("check_cli_f32_text");
+    let below = CUBE.replace(" 0\n", " -1\n").replace(" 1\n", " 0\n");
+    let body = write(&dir, "body.obj", &below);
+    for (height, penetrating) in [("0.005", 1), ("0.0050000001", 0)] {
+        // A triangle with one vertex over the top at `height`, the others far above.
+        let cloth = write(
+            &dir,
+            "cloth.obj",
+            &format!("v 0.5 0.5 {height}\nv 0.6 0.5 1\nv 0.5 0.6 1\nf 1 2 3\n"),
+        );
+        let code = if penetrating > 0 { 1 } else { 0 };
+        let args: [&Path; 3] = [&cloth, Path::new("--against"), &body];
+        let r = report(&dir, &args, &["--thickness", "0.005"], code);
+        assert_eq!(
+            r["total"]["penetrating_vertices"], penetrating,
+            "{height}: {r}"
+        );
+        if penetrating > 0 {
+            // The deepest vertex is named as the file writes it.
+            assert_eq!(
+                r["frames"][0]["deepest_point"],
+                serde_json::json!([0.5, 0.5, 0.005])
+            );
+        }
+    }
 }
 
 #[test]

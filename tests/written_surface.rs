@@ -119,6 +119,47 @@ fn assert_clean_at(n: u32, [substeps, level, frames]: [u32; 3], nudge: f64) {
     std::fs::remove_dir_all(dir.parent().unwrap()).unwrap();
 }
 
+/// Two layers 30 nm apart round to the same `f32` and would be written touching; their
+/// corners are rounded apart instead, one `f32` step, and the written surface and control
+/// mesh are clean as the run and `tailor check` read them. Frame 0, the rest pose, is written
+/// before any step.
+#[test]
+fn layers_nearer_than_an_f32_step_are_written_apart() {
+    let dir = scratch("written_surface_layers");
+    let mut text = String::new();
+    for y in ["1.00000003", "1"] {
+        for k in 0..9 {
+            let (x, z) = (0.3 + 0.1 * f64::from(k % 3), 0.3 + 0.1 * f64::from(k / 3));
+            text += &format!("v {x} {y} {z}\n");
+        }
+    }
+    for layer in 0..2 {
+        for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let v = 9 * layer + 3 * j + i + 1;
+            text += &format!("f {} {} {} {}\n", v, v + 3, v + 4, v + 1);
+        }
+    }
+    std::fs::write(dir.join("layers.obj"), text).unwrap();
+    let scene = "[scene]\nfps = 24\nframes = 1\nsubsteps = 1\n\n\
+                 [cloth]\nmesh = \"layers.obj\"\nmaterial = \"cotton\"\nthickness = 0.005\n\
+                 self_collision = true\n\n[output]\ndir = \"out\"\nsubdivision_level = 1\n";
+    let summary = simulate_scene(&dir, "layers.toml", scene);
+    assert_eq!(summary["total"]["self_intersecting_pairs"], 0, "{summary}");
+    let out = dir.join("out");
+    for files in ["cloth_####.obj", "cloth_control_####.obj"] {
+        let findings = check_findings(&out.join(files), &[]);
+        assert!(findings.is_none(), "{files}: {findings:?}");
+    }
+    // The upper layer went up a step (the f32 after 1), the lower stayed at 1.
+    let written = std::fs::read_to_string(out.join("cloth_control_0000.obj")).unwrap();
+    let heights: Vec<&str> = written
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| l.split(' ').nth(1).unwrap())
+        .collect();
+    assert_eq!(heights, [["1.0000001"; 9], ["1"; 9]].concat());
+}
+
 #[test]
 fn the_32_drape_writes_a_clean_level_2_surface() {
     assert_clean(32, 2, 2, 26);

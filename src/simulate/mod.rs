@@ -548,6 +548,10 @@ struct Output<'a> {
     first: u32,
     /// The text of the garment's control mesh, with its groups, but its positions.
     control: Frames,
+    /// The control mesh as written, rounded apart where it would cross
+    /// ([`Surface::round_crossings_apart`]), when it is written beside a refined surface; at
+    /// level 0 the written surface is the control mesh.
+    control_surface: Option<Surface>,
     cloth: Surface,
     /// The text of the written cloth surface but its positions and normals.
     cloth_text: Frames,
@@ -572,13 +576,20 @@ impl<'a> Output<'a> {
             Some(b) => Some(Surface::new(&b.rest, b.level, false)?),
             None => None,
         };
-        let precision = scene.output.precision;
+        let out = &scene.output;
+        let precision = out.precision;
         let doc = &scene.cloth.doc;
+        let control_surface = if out.control_mesh && out.level > 0 {
+            Some(Surface::new(&doc.mesh, 0, false)?)
+        } else {
+            None
+        };
         Ok(Self {
             scene,
             dir,
             first,
             control: Frames::new(&doc.mesh, &doc.groups, false, precision),
+            control_surface,
             cloth_text: cloth.frames(precision),
             cloth,
             body_text: body.as_ref().map(|b| b.frames(precision)),
@@ -603,14 +614,26 @@ impl<'a> Output<'a> {
         if let (Some(surface), Some(posed)) = (&mut self.body, body) {
             surface.set(posed, precision)?;
         }
-        row.findings = crate::check::inspect(
-            self.cloth.hierarchy(),
-            self.cloth.mesh().positions(),
-            self.body.as_ref().map(Surface::hierarchy),
-            self.scene.cloth.thickness,
-            &mut self.clearances,
-        )
-        .with_context(|| format!("checking frame {frame}"))?;
+        let inspect = |output: &mut Self| {
+            crate::check::inspect(
+                output.cloth.hierarchy(),
+                output.cloth.mesh().positions(),
+                output.body.as_ref().map(Surface::hierarchy),
+                output.scene.cloth.thickness,
+                &mut output.clearances,
+            )
+            .with_context(|| format!("checking frame {frame}"))
+        };
+        row.findings = inspect(self)?;
+        if row.findings.self_intersecting_pairs > 0 {
+            let exact = self.cloth.refine(&state.positions);
+            self.cloth.round_crossings_apart(&exact, precision)?;
+            row.findings = inspect(self)?;
+        }
+        if let Some(control) = &mut self.control_surface {
+            control.set(state.positions.clone(), precision)?;
+            control.round_crossings_apart(&state.positions, precision)?;
+        }
         if frame >= self.first {
             self.write(frame, &state)?;
         }
@@ -632,8 +655,9 @@ impl<'a> Output<'a> {
         let name = |prefix: &str| self.dir.join(format!("{prefix}_{frame:04}.obj"));
         let out = &self.scene.output;
         if out.control_mesh {
+            let written = self.control_surface.as_ref().unwrap_or(&self.cloth);
             write_atomically(&name("cloth_control"), |w| {
-                self.control.write(&state.positions, None, w)
+                self.control.write(written.mesh().positions(), None, w)
             })?;
         }
         self.cloth

@@ -79,7 +79,7 @@ pub use edges::{EdgeProximity, segments_closest_points};
 pub use error::CollideError;
 pub use hierarchy::Hierarchy;
 pub use proximity::{Closest, LocalFaces, Neighbours};
-pub use triangle::triangles_intersect;
+pub use triangle::{triangles_apart, triangles_intersect};
 
 /// A point in space, in metres.
 pub type Point = nalgebra::Point3<f64>;

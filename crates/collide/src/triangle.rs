@@ -1,5 +1,5 @@
-//! Exact tests on single triangles and segments: zero area, triangle–triangle intersection and
-//! closest points between segments.
+//! Exact tests on single triangles and segments: zero area, triangle–triangle intersection,
+//! closest points between segments, and the direction that parts two triangles.
 //!
 //! The intersection test is the classic reduction (Möller 1997; Guigue & Devillers 2003): two
 //! triangles in general position meet exactly when an edge of one crosses the other, decided by
@@ -18,10 +18,12 @@
 //! rounding does not matter, and its orientations are well away from zero, the fast path.
 
 use parry3d_f64::math::Vector as DVec3;
+use parry3d_f64::query::PointQuery;
+use parry3d_f64::shape::Triangle;
 use robust::{Coord, Coord3D, orient2d, orient3d};
 
-use crate::Point;
-use crate::convert::to_glam;
+use crate::convert::{to_glam, to_vector};
+use crate::{Point, Vector};
 
 /// Whether a triangle has (numerically) zero area: twice its area is within rounding of zero
 /// relative to its longest edge.
@@ -190,6 +192,44 @@ fn segments_meet_2d(a: V2, b: V2, c: V2, d: V2) -> bool {
         || (o4 == 0.0 && within(c, d, b))
 }
 
+/// For two triangles that do not meet ([`triangles_intersect`]), the unit direction from the
+/// closest point of `q` to the closest point of `p`: the plane through either point across
+/// it has `p` on its side and `q` on the other, so moving the corners of `p` along it (or
+/// any way whose component along it is not negative) and those of `q` against it keeps them
+/// apart. `None` when they meet (or a triangle has zero area).
+///
+/// Two disjoint triangles are nearest at a corner of one and the other triangle, or at two
+/// edges (Ericson, *Real-Time Collision Detection*, §5.2.8), so those fifteen pairs are tried.
+#[must_use]
+pub fn triangles_apart(p: [Point; 3], q: [Point; 3]) -> Option<Vector> {
+    let (p, q) = (p.map(|x| to_glam(&x)), q.map(|x| to_glam(&x)));
+    if is_degenerate(p) || is_degenerate(q) || triangles_meet(p, q) {
+        return None;
+    }
+    let foot = |t: [DVec3; 3], x: DVec3| {
+        Triangle::new(t[0], t[1], t[2])
+            .project_local_point(x, true)
+            .point
+    };
+    // Each candidate as (from q, to p).
+    let corners = p
+        .iter()
+        .map(|&x| (foot(q, x), x))
+        .chain(q.iter().map(|&y| (y, foot(p, y))));
+    let edges = (0..3).flat_map(|i| {
+        (0..3).map(move |j| {
+            let (a0, a1, b0, b1) = (p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3]);
+            let (s, u, _) = segment_closest(a0, a1, b0, b1);
+            (b0 + (b1 - b0) * u, a0 + (a1 - a0) * s)
+        })
+    });
+    let (from, to) = corners
+        .chain(edges)
+        .min_by(|a, b| (a.1 - a.0).length().total_cmp(&(b.1 - b.0).length()))?;
+    let direction = (to - from).normalize_or_zero();
+    (direction != DVec3::ZERO).then(|| to_vector(direction))
+}
+
 /// Closest points between segments `p0 p1` and `q0 q1` (Ericson, *Real-Time Collision
 /// Detection*, §5.1.9): the parameters `(s, u)` in `[0, 1]` along each and the distance.
 /// Parallel and zero-length segments are handled.
@@ -310,6 +350,61 @@ mod tests {
             rejected += usize::from(filtered && !is_degenerate(p) && !is_degenerate(q));
         }
         assert!(rejected > 1000 && meeting > 1000, "{rejected} {meeting}");
+    }
+
+    /// Random pairs of triangles in a unit cube: for those apart, neither triangle reaches past
+    /// the plane the direction makes, and moving each triangle's corners its own way along it
+    /// never makes them meet.
+    #[test]
+    fn the_direction_apart_parts_the_triangles() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut unit = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut apart = 0;
+        for _ in 0..4000 {
+            let mut corner = || Point::new(unit(), unit(), unit());
+            let (p, q) = (
+                [corner(), corner(), corner()],
+                [corner(), corner(), corner()],
+            );
+            let direction = triangles_apart(p, q);
+            assert_eq!(
+                direction.is_none(),
+                triangles_intersect(p, q),
+                "{p:?} {q:?}"
+            );
+            let Some(n) = direction else { continue };
+            apart += 1;
+            assert!((n.norm() - 1.0).abs() < 1e-12);
+            // The gap along n: p's lowest corner above q's highest.
+            let along = |t: &[Point; 3]| t.map(|x| x.coords.dot(&n));
+            let low = along(&p).into_iter().fold(f64::INFINITY, f64::min);
+            let high = along(&q).into_iter().fold(f64::NEG_INFINITY, f64::max);
+            assert!(low >= high - 1e-12, "{p:?} {q:?}: {low} < {high}");
+            // Each corner of p moved by a random amount with no component against n, each
+            // of q with none along it.
+            let mut moved = |t: [Point; 3], sign: f64| {
+                t.map(|x| {
+                    let d = Vector::new(unit() - 0.5, unit() - 0.5, unit() - 0.5) * 0.2;
+                    let along = d.dot(&n) * sign;
+                    x + if along < 0.0 {
+                        d - n * (along * sign)
+                    } else {
+                        d
+                    }
+                })
+            };
+            let (p2, q2) = (moved(p, 1.0), moved(q, -1.0));
+            assert!(
+                !triangles_intersect(p2, q2),
+                "{p:?} {q:?} moved to {p2:?} {q2:?}"
+            );
+        }
+        assert!(apart > 1000, "{apart}");
     }
 
     #[test]

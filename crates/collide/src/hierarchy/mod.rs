@@ -172,7 +172,7 @@ impl Hierarchy {
         &self.topology.triangles
     }
 
-    /// The face each fan triangle belongs to.
+    /// The face each fan triangle belongs to; the triangles come face by face, in face order.
     #[must_use]
     pub fn triangle_faces(&self) -> &[u32] {
         &self.topology.triangle_face

@@ -114,6 +114,56 @@ impl Precision {
         self.single(x).map_or(x, f64::from)
     }
 
+    /// What a reader holds of `x` written at this precision when `x` is rounded towards the
+    /// sign of `toward` rather than to the nearest: at [`Precision::Single`] the nearest
+    /// `f32` on that side of `x` whose text, read into an `f64`, is on that side too (the
+    /// shortest decimal can lie half a step either way of its `f32`), so at most two `f32`
+    /// steps from `x`; `x`'s nearest when `toward` is zero. At [`Precision::Full`], `x`. For
+    /// writing two features that are apart but nearer than an `f32` step so that they stay
+    /// apart, as an `f32` reader and as an `f64` reader hold them.
+    #[must_use]
+    pub fn round_toward(self, x: f64, toward: f64) -> f64 {
+        let Some(mut single) = self.single(x) else {
+            return x;
+        };
+        if toward == 0.0 {
+            return f64::from(single);
+        }
+        let mut buffer = ryu::Buffer::new();
+        let mut read = |s: f32| -> f64 {
+            write::shortest(f64::from(s), self, &mut buffer)
+                .parse()
+                .unwrap_or(f64::from(s))
+        };
+        let on_side = |y: f64| (y - x) * toward >= 0.0;
+        for _ in 0..3 {
+            if on_side(f64::from(single)) && on_side(read(single)) {
+                break;
+            }
+            single = if toward > 0.0 {
+                single.next_up()
+            } else {
+                single.next_down()
+            };
+        }
+        f64::from(single)
+    }
+
+    /// The precision a file's numbers were written at, from `numbers` as a reader into `f64`
+    /// got them: [`Precision::Single`] when each is the shortest text of an `f32` read back
+    /// (what [`write()`] writes at that precision; a reader into `f32`, such as a renderer,
+    /// then holds [`Precision::round`] of each), else [`Precision::Full`]. A number written
+    /// with more digits than an `f32` needs reads back as itself only by chance.
+    pub fn of_text(numbers: impl IntoIterator<Item = f64>) -> Self {
+        let mut buffer = ryu::Buffer::new();
+        let single = numbers.into_iter().all(|x| {
+            write::shortest(x, Self::Single, &mut buffer)
+                .parse::<f64>()
+                .is_ok_and(|read| read == x)
+        });
+        if single { Self::Single } else { Self::Full }
+    }
+
     /// `x` as the `f32` its text is written from, or `None` when it is written as an `f64`.
     fn single(self, x: f64) -> Option<f32> {
         let single = x as f32;

@@ -550,6 +550,65 @@ mod tests {
         }
     }
 
+    #[test]
+    fn round_toward_takes_the_nearest_f32_read_on_the_side_asked() {
+        let unit = bits(100_000).map(|b| (b >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0);
+        let mut buffer = ryu::Buffer::new();
+        let mut read =
+            |y: f64| -> f64 { shortest(y, Precision::Single, &mut buffer).parse().unwrap() };
+        let mut stepped = 0;
+        for x in unit.chain([0.0, 1.0, 0.1, -0.1, 1e-30]) {
+            let nearest = Precision::Single.round(x);
+            assert_eq!(Precision::Single.round_toward(x, 0.0), nearest);
+            for toward in [1.0, -1.0] {
+                let r = Precision::Single.round_toward(x, toward);
+                // An f32 on the side asked, read back from its text on that side too ...
+                assert_eq!(f64::from(r as f32), r);
+                assert!((r - x) * toward >= 0.0, "{x:e} toward {toward}: {r:e}");
+                assert!(
+                    (read(r) - x) * toward >= 0.0,
+                    "{x:e} toward {toward}: {r:e}"
+                );
+                // ... and the nearest such: the f32 before it is not.
+                let before = f64::from(if toward > 0.0 {
+                    (r as f32).next_down()
+                } else {
+                    (r as f32).next_up()
+                });
+                let fits = (before - x) * toward >= 0.0 && (read(before) - x) * toward >= 0.0;
+                assert!(!fits, "{x:e} toward {toward}: {before:e} is nearer");
+                stepped += usize::from(r != nearest && (nearest - x) * toward >= 0.0);
+            }
+            assert_eq!(Precision::Full.round_toward(x, 1.0), x);
+        }
+        // The text read into an f64 sometimes lands on the wrong side of the nearest.
+        assert!(stepped > 1000, "{stepped}");
+    }
+
+    #[test]
+    fn the_precision_of_a_text_is_told_from_its_numbers() {
+        let unit: Vec<f64> = bits(10_000)
+            .map(|b| (b >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0)
+            .collect();
+        let read = |precision: Precision| -> Vec<f64> {
+            let mut buffer = ryu::Buffer::new();
+            unit.iter()
+                .map(|&x| shortest(x, precision, &mut buffer).parse().unwrap())
+                .collect()
+        };
+        assert_eq!(
+            Precision::of_text(read(Precision::Single)),
+            Precision::Single
+        );
+        assert_eq!(Precision::of_text(read(Precision::Full)), Precision::Full);
+        // One number with more digits than an f32 needs makes the text full.
+        let mut mixed = read(Precision::Single);
+        mixed[5000] = 0.1 + 1e-12;
+        assert_eq!(Precision::of_text(mixed), Precision::Full);
+        // Short decimals are f32 text too: an f32 reader holds their nearest f32.
+        assert_eq!(Precision::of_text([0.5, -2.0, 0.1]), Precision::Single);
+    }
+
     /// The text of `{}`, or `{:e}` outside 1e-5..1e16 (where `{}` writes hundreds of digits).
     fn display(x: f64) -> String {
         let a = x.abs();
