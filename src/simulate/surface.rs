@@ -139,19 +139,20 @@ impl Surface {
         Ok(())
     }
 
-    /// Rounds again, apart, the corners of the faces `crossing` lists in pairs (the refined
-    /// faces [`Hierarchy::self_intersections`] finds at the positions [`Self::set`] rounded):
-    /// for each pair of their triangles that meets as rounded but not at `exact` (the refined
-    /// points before rounding), each coordinate of each corner is rounded towards the side
-    /// [`triangles_apart`] parts the two to, rather than to the nearest. Each coordinate stays
-    /// within one `f32` step of the simulation's, and the two triangles stay apart: at the
-    /// default precision two layers less than an `f32` step apart (tens of nanometres within a
-    /// metre of the origin) can otherwise round into each other. Refits the hierarchy; returns
-    /// how many triangle pairs it parted, none at full precision.
+    /// Rounds again, apart, the corners of the faces `crossing` lists in pairs (the faces
+    /// [`Hierarchy::self_intersections`] finds at the positions [`Self::set`] rounded): for
+    /// each pair of their triangles that meets as rounded but not at `exact` (the points
+    /// before rounding), each coordinate of each corner is rounded towards the side
+    /// [`triangles_apart`] parts the two to ([`Precision::round_toward`]), rather than to the
+    /// nearest. Each coordinate stays within two `f32` steps of the simulation's, and the two
+    /// triangles stay apart: at the default precision two layers less than an `f32` step
+    /// apart (tens of nanometres within a metre of the origin) can otherwise round into each
+    /// other. Refits the hierarchy; returns how many triangle pairs it parted, none at full
+    /// precision.
     ///
     /// # Errors
     /// When a position is not finite.
-    pub fn round_apart(
+    fn round_apart(
         &mut self,
         exact: &[Point],
         crossing: &[[u32; 2]],
