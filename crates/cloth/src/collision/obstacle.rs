@@ -489,25 +489,29 @@ mod tests {
         );
     }
 
-    /// A vertex the passes after the continuous one move deeper into the body than the
-    /// thickness is still found and put out; one that moved as far but stays out is left.
-    #[test]
-    fn the_projection_finds_a_vertex_moved_deep_into_the_body() {
+    /// Runs `test` on [`floor`] at the start of a 10 ms substep and an `n` × `n` sheet 20 cm
+    /// square at `height` above its top, every vertex free and moving at `velocity`, after
+    /// the continuous pass: the obstacle, the thickness (5 mm) and the substep.
+    fn sheet_above_floor(
+        n: u32,
+        height: f64,
+        velocity: Vec3,
+        test: impl FnOnce(&mut Obstacle, f64, &mut Substep),
+    ) {
         let mut obstacle = floor();
         let thickness = 0.005;
         let h = 0.01;
         obstacle.begin_substep(0.0, h);
-        // A 3 × 3 sheet 1 cm above the floor, at rest: the continuous pass moves nothing.
-        let sheet = crate::shapes::centred_sheet(3, 0.2);
+        let sheet = crate::shapes::centred_sheet(n, 0.2);
         let x0: Vec<Point> = sheet
             .positions()
             .iter()
-            .map(|p| p + Vec3::y() * 0.01)
+            .map(|p| p + Vec3::y() * height)
             .collect();
         let mut cloth =
             Hierarchy::build(&x0, sheet.face_offsets(), sheet.face_vertices()).expect("a sheet");
         let mut x = x0.clone();
-        let mut v = vec![Vec3::zeros(); x.len()];
+        let mut v = vec![velocity; x.len()];
         let inverse_mass = vec![1.0; x.len()];
         let mut m = Substep {
             h,
@@ -516,86 +520,74 @@ mod tests {
             v: &mut v,
             inverse_mass: &inverse_mass,
         };
+        // At rest or moving up, above the floor: the continuous pass moves nothing.
         assert_eq!(
             obstacle.resolve_impacts(&mut cloth, thickness, &mut m),
             Ok(0)
         );
-        // A self pass then takes the middle vertex 2 cm into the floor, a corner 3 mm into it
-        // and another corner 3 cm up.
-        m.x[4].y = -0.02;
-        m.x[0].y = -0.003;
-        m.x[8].y = 0.04;
-        assert_eq!(obstacle.project(thickness, &mut m), Ok(2));
-        for i in [0, 4] {
-            assert!(
-                (m.x[i].y - 0.5 * thickness).abs() < 1e-6 * thickness,
-                "vertex {i} at {}",
-                m.x[i]
-            );
-            assert!(m.v[i].y >= 0.0, "vertex {i} still moves in: {}", m.v[i]);
-        }
-        assert_eq!(m.x[8].y, 0.04);
+        test(&mut obstacle, thickness, &mut m);
+    }
+
+    /// A vertex the passes after the continuous one move deeper into the body than the
+    /// thickness is still found and put out; one that moved as far but stays out is left.
+    #[test]
+    fn the_projection_finds_a_vertex_moved_deep_into_the_body() {
+        // A 3 × 3 sheet 1 cm above the floor, at rest.
+        sheet_above_floor(3, 0.01, Vec3::zeros(), |obstacle, thickness, m| {
+            // A self pass then takes the middle vertex 2 cm into the floor, a corner 3 mm
+            // into it and another corner 3 cm up.
+            m.x[4].y = -0.02;
+            m.x[0].y = -0.003;
+            m.x[8].y = 0.04;
+            assert_eq!(obstacle.project(thickness, m), Ok(2));
+            for i in [0, 4] {
+                assert!(
+                    (m.x[i].y - 0.5 * thickness).abs() < 1e-6 * thickness,
+                    "vertex {i} at {}",
+                    m.x[i]
+                );
+                assert!(m.v[i].y >= 0.0, "vertex {i} still moves in: {}", m.v[i]);
+            }
+            assert_eq!(m.x[8].y, 0.04);
+        });
     }
 
     /// A second projection in the substep skips the vertices the first found clear and that
     /// have not moved since, and ends as one that looks at every vertex.
     #[test]
     fn a_projection_again_gives_the_bytes_of_a_full_one() {
-        let mut obstacle = floor();
-        let thickness = 0.005;
-        let h = 0.01;
-        obstacle.begin_substep(0.0, h);
-        // A 5 × 5 sheet 4 mm above the floor (within the thickness, outside its half).
-        let sheet = crate::shapes::centred_sheet(5, 0.2);
-        let x0: Vec<Point> = sheet
-            .positions()
-            .iter()
-            .map(|p| p + Vec3::y() * 0.004)
-            .collect();
-        let mut cloth =
-            Hierarchy::build(&x0, sheet.face_offsets(), sheet.face_vertices()).expect("a sheet");
-        let mut x = x0.clone();
-        let mut v = vec![Vec3::y(); x.len()];
-        let inverse_mass = vec![1.0; x.len()];
-        let mut m = Substep {
-            h,
-            x0: &x0,
-            x: &mut x,
-            v: &mut v,
-            inverse_mass: &inverse_mass,
-        };
-        obstacle
-            .resolve_impacts(&mut cloth, thickness, &mut m)
-            .expect("finite");
-        m.x[3].y = -0.001;
-        assert_eq!(obstacle.project(thickness, &mut m), Ok(1));
-        // Then passes move vertices: into the body, deep into it, within half the
-        // thickness, and along it; the rest stay where the projection found them clear.
-        // (The cloth's velocities are all up, so a vertex's velocity shows whether the
-        // projection stopped its approach.)
-        m.x[7].y = -0.002;
-        m.x[12].y = -0.03;
-        m.x[18].y = 0.001;
-        m.x[20].x += 0.001;
-        let mut full = obstacle.clone();
-        full.clear.clear();
-        let (mut x_full, mut v_full) = (m.x.to_vec(), m.v.to_vec());
-        let mut m_full = Substep {
-            h,
-            x0: &x0,
-            x: &mut x_full,
-            v: &mut v_full,
-            inverse_mass: &inverse_mass,
-        };
-        let again = obstacle.project(thickness, &mut m);
-        assert_eq!(again, Ok(3));
-        assert_eq!(full.project(thickness, &mut m_full), again);
-        assert_eq!(m.x, m_full.x);
-        assert_eq!(m.v, m_full.v);
-        // Vertex 3, put out by the first projection, is looked at again: where it was put is
-        // not known to be clear.
-        assert_eq!(obstacle.asked, [3, 7, 12, 18, 20]);
-        assert_eq!(full.asked.len(), 25);
+        // A 5 × 5 sheet 4 mm above the floor (within the thickness, outside its half),
+        // moving up, so that a vertex's velocity shows whether a projection stopped its
+        // approach.
+        sheet_above_floor(5, 0.004, Vec3::y(), |obstacle, thickness, m| {
+            m.x[3].y = -0.001;
+            assert_eq!(obstacle.project(thickness, m), Ok(1));
+            // Then passes move vertices: into the body, deep into it, within half the
+            // thickness, and along it; the rest stay where the projection found them clear.
+            m.x[7].y = -0.002;
+            m.x[12].y = -0.03;
+            m.x[18].y = 0.001;
+            m.x[20].x += 0.001;
+            let mut full = obstacle.clone();
+            full.clear.clear();
+            let (mut x_full, mut v_full) = (m.x.to_vec(), m.v.to_vec());
+            let mut m_full = Substep {
+                h: m.h,
+                x0: m.x0,
+                x: &mut x_full,
+                v: &mut v_full,
+                inverse_mass: m.inverse_mass,
+            };
+            let again = obstacle.project(thickness, m);
+            assert_eq!(again, Ok(3));
+            assert_eq!(full.project(thickness, &mut m_full), again);
+            assert_eq!(m.x, m_full.x);
+            assert_eq!(m.v, m_full.v);
+            // Vertex 3, put out by the first projection, is looked at again: where it was
+            // put is not known to be clear.
+            assert_eq!(obstacle.asked, [3, 7, 12, 18, 20]);
+            assert_eq!(full.asked.len(), 25);
+        });
     }
 
     #[test]
