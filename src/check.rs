@@ -37,7 +37,10 @@ use crate::sequence::Pattern;
 /// Arguments of `tailor check`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Exit status: 0 when nothing is found, 1 when any vertex penetrates or any \
+    after_help = "A file whose every coordinate is the shortest text of a single-precision \
+float (as `tailor simulate` writes by default) is judged as a renderer reads it, each \
+coordinate that float; a file with more digits is read in double precision. \
+Exit status: 0 when nothing is found, 1 when any vertex penetrates or any \
 faces intersect, 2 when the input cannot be checked (unreadable file, non-finite coordinate, \
 missing frame) or the summary or report cannot be written. When standard output is closed \
 early (`| head`), the check stops quietly with exit status 0."
