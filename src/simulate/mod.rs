@@ -630,10 +630,6 @@ impl<'a> Output<'a> {
             self.cloth.round_crossings_apart(&exact, precision)?;
             row.findings = inspect(self)?;
         }
-        if let Some(control) = &mut self.control_surface {
-            control.set(state.positions.clone(), precision)?;
-            control.round_crossings_apart(&state.positions, precision)?;
-        }
         if frame >= self.first {
             self.write(frame, &state)?;
         }
@@ -655,6 +651,10 @@ impl<'a> Output<'a> {
         let name = |prefix: &str| self.dir.join(format!("{prefix}_{frame:04}.obj"));
         let out = &self.scene.output;
         if out.control_mesh {
+            if let Some(control) = &mut self.control_surface {
+                control.set(state.positions.clone(), out.precision)?;
+                control.round_crossings_apart(&state.positions, out.precision)?;
+            }
             let written = self.control_surface.as_ref().unwrap_or(&self.cloth);
             write_atomically(&name("cloth_control"), |w| {
                 self.control.write(written.mesh().positions(), None, w)

@@ -79,11 +79,12 @@
 //!    when the zones came in a frame's last substep: 19% and 32% on a frame of two piles), the
 //!    zones' vertices held, and the control mesh's self impacts then check what that moved.
 //!    The control mesh can be free of crossings while the surface it defines is not: where a
-//!    hem crumples, the refined faces of two folds crossed on 12 of 61 frames of the 64² drape. And the refined pass and the lift move control
-//!    points the control mesh's tests have not seen: without the control mesh's tests in
-//!    these rounds it ended crossed on 50 of 61 frames of the 128² drape, and at one substep a
-//!    frame the next substeps could not undo it and the 64² drape tangled (47% strain, the
-//!    written surface crossed on 47 frames). The projection that follows those tests moves
+//!    hem crumples, the refined faces of two folds crossed on 12 of 61 frames of the 64²
+//!    drape. And the refined pass and the lift move control points the control mesh's tests
+//!    have not seen: without the control mesh's tests in these rounds it ended crossed on 50
+//!    of 61 frames of the 128² drape, and at one substep a frame the next substeps could not
+//!    undo it and the 64² drape tangled (47% strain, the written surface crossed on 47
+//!    frames). The projection that follows those tests moves
 //!    vertices they have not seen too, so a round that projected anything is followed by
 //!    another, whose tests hold what it projected heavier, and rounds that run out end with
 //!    the control mesh's tests: the 128² drape at one substep a frame ended frame 22 with

@@ -130,14 +130,10 @@ impl Precision {
             return f64::from(single);
         }
         let mut buffer = ryu::Buffer::new();
-        let mut read = |s: f32| -> f64 {
-            write::shortest(f64::from(s), self, &mut buffer)
-                .parse()
-                .unwrap_or(f64::from(s))
-        };
         let on_side = |y: f64| (y - x) * toward >= 0.0;
         for _ in 0..3 {
-            if on_side(f64::from(single)) && on_side(read(single)) {
+            let value = f64::from(single);
+            if on_side(value) && on_side(self.read_back(value, &mut buffer)) {
                 break;
             }
             single = if toward > 0.0 {
@@ -156,12 +152,16 @@ impl Precision {
     /// with more digits than an `f32` needs reads back as itself only by chance.
     pub fn of_text(numbers: impl IntoIterator<Item = f64>) -> Self {
         let mut buffer = ryu::Buffer::new();
-        let single = numbers.into_iter().all(|x| {
-            write::shortest(x, Self::Single, &mut buffer)
-                .parse::<f64>()
-                .is_ok_and(|read| read == x)
-        });
+        let single = numbers
+            .into_iter()
+            .all(|x| Self::Single.read_back(x, &mut buffer) == x);
         if single { Self::Single } else { Self::Full }
+    }
+
+    /// What a reader into `f64` holds of `x` written at this precision: its shortest text
+    /// read back.
+    fn read_back(self, x: f64, buffer: &mut ryu::Buffer) -> f64 {
+        write::shortest(x, self, buffer).parse().unwrap_or(x)
     }
 
     /// `x` as the `f32` its text is written from, or `None` when it is written as an `f64`.
