@@ -6,15 +6,16 @@
 //! The traversal pairs faces whose swept boxes overlap; a pair of faces `(f, g)` then tests the
 //! vertices *owned* by `f` against the triangles of `g` (and the reverse) and the edges owned by
 //! `f` against those owned by `g` (see [`crate::topology`]), so each pair of features is tested
-//! once. Within one mesh, pairs sharing a vertex are skipped, and the normal cones over the step
-//! ([`crate::cones`]) clear whole smooth regions. Against a body, cloth only needs its vertices
-//! kept out of the body's triangles ([`Hierarchy::vertex_impacts_with`]): the same traversal
-//! with the vertex–triangle tests alone.
+//! once. Within one mesh, pairs of features sharing a vertex are skipped, the normal cones over
+//! the step ([`crate::cones`]) clear whole smooth regions, and two faces around a vertex whose
+//! star they clear are not tested against each other. Against a body, cloth only needs its
+//! vertices kept out of the body's triangles ([`Hierarchy::vertex_impacts_with`]): the same
+//! traversal with the vertex–triangle tests alone.
 
 use parry3d_f64::math::Vector as DVec3;
 
 use crate::ccd::{apart_boxes, edge_edge_unboxed, swept, vertex_triangle_unboxed};
-use crate::cones::NormalCones;
+use crate::cones::{NormalCones, Stars};
 use crate::hierarchy::Hierarchy;
 use crate::traverse::{cross_pairs, self_pairs};
 
@@ -149,8 +150,12 @@ impl Hierarchy {
     /// node that moved).
     fn self_pairs_impacts(&self, dirty: Option<&[bool]>) -> Vec<Found> {
         let cones = NormalCones::new(self);
+        let stars = Stars::new(self, &cones);
         let visit = |a: u32, b: u32, out: &mut Vec<Found>| {
             let (f, g) = (a.min(b), a.max(b));
+            if f != g && stars.part(f, g) {
+                return;
+            }
             vertices_against_face(self, f, self, g, true, Found::VertexTriangle, out);
             if f != g {
                 vertices_against_face(self, g, self, f, true, Found::VertexTriangle, out);
