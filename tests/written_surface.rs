@@ -30,13 +30,12 @@
 
 use std::path::PathBuf;
 
-use nalgebra::Vector3;
-use tailor_cloth::shapes;
-use tailor_subdiv::Point;
-
-use common::{check_findings, check_written, scratch, simulate_scene, write_mesh};
+use common::{check_findings, check_written, scratch, simulate_scene};
+use drape::Drape;
 
 mod common;
+#[path = "../examples/drape_scene/drape.rs"]
+mod drape;
 
 /// Runs the `n`² drape for `frames` frames at `substeps` a frame, writing level `level`, the
 /// sphere moved by `nudge` metres along x, in a fresh directory `name`, and returns its output
@@ -48,25 +47,15 @@ fn drape(
     nudge: f64,
 ) -> (PathBuf, serde_json::Value) {
     let dir = scratch(name);
-    write_mesh(&dir, "sheet.obj", &shapes::centred_sheet(n, 2.0));
-    let mut sphere = shapes::sphere(Point::new(0.0, -1.0, 0.0), 0.5, 24, 48);
-    if nudge != 0.0 {
-        let moved: Vec<Point> = sphere
-            .positions()
-            .iter()
-            .map(|p| p + Vector3::x() * nudge)
-            .collect();
-        sphere.set_positions(&moved).unwrap();
-    }
-    write_mesh(&dir, "sphere.obj", &sphere);
-    let scene = format!(
-        "[scene]\nfps = 24\nframes = {frames}\nsubsteps = {substeps}\n\n\
-         [cloth]\nmesh = \"sheet.obj\"\nmaterial = \"cotton\"\nthickness = 0.005\n\
-         friction = 0.3\nself_collision = true\n\n\
-         [body]\nmesh = \"sphere.obj\"\nsubdivision_level = 0\n\n\
-         [output]\ndir = \"out\"\nsubdivision_level = {level}\n"
-    );
-    let summary = simulate_scene(&dir, "drape.toml", &scene);
+    let drape = Drape {
+        n,
+        substeps,
+        level,
+        frames,
+        nudge,
+    };
+    drape.write_meshes(&dir).unwrap();
+    let summary = simulate_scene(&dir, "drape.toml", &drape.scene());
     (dir.join("out"), summary)
 }
 
