@@ -83,9 +83,10 @@ impl NormalCones {
         each(e0.cross(g0)) && each((e0.cross(g1) + e1.cross(g0)) / 2.0) && each(e1.cross(g1))
     }
 
-    /// The sum of the normal coefficients of the triangles of a superface, from its
-    /// `boundary` chain (see the module docs): `Σ p × q` at the start and at the end, and the Bernstein middle
-    /// term `Σ (p0 × q1 + p1 × q0) / 2` of a swept refit, relative to the first boundary vertex.
+    /// The sum of the normal coefficients of the triangles of a superface, from its `boundary`
+    /// chain (see the module docs): `Σ p × q` at the start and at the end, and the Bernstein
+    /// middle term `Σ (p0 × q1 + p1 × q0) / 2` of a swept refit, relative to the first boundary
+    /// vertex.
     fn boundary_axis(&self, h: &Hierarchy, boundary: &[[u32; 2]]) -> DVec3 {
         let Some(&[origin, _]) = boundary.first() else {
             return DVec3::ZERO;
