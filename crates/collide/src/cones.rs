@@ -375,14 +375,18 @@ mod tests {
         assert!(!cones.cannot_self_collide(&h, h.root()));
     }
 
+    /// The positions of `h`'s last refit (the start of a swept one).
+    fn start_positions(h: &Hierarchy) -> Vec<Point> {
+        h.start
+            .iter()
+            .map(|&p| crate::convert::to_point(p))
+            .collect()
+    }
+
     #[test]
     fn a_flip_during_the_step_is_not_culled() {
         let mut h = sheet(4, |_, _| 0.0);
-        let start: Vec<Point> = h
-            .start
-            .iter()
-            .map(|&p| crate::convert::to_point(p))
-            .collect();
+        let start = start_positions(&h);
         // Turn the sheet upside down over the step (mirror x): normals swing through the plane.
         let end: Vec<Point> = start
             .iter()
@@ -407,11 +411,7 @@ mod tests {
     fn stars_are_cleared_on_a_waving_sheet_and_not_across_a_closing_crease() {
         let n = 8;
         let mut h = sheet(n, |_, _| 0.0);
-        let start: Vec<Point> = h
-            .start
-            .iter()
-            .map(|&p| crate::convert::to_point(p))
-            .collect();
+        let start = start_positions(&h);
         let waved: Vec<Point> = start
             .iter()
             .map(|p| Point::new(p.x, p.y, 0.1 * (3.0 * p.x + 2.0 * p.y).sin()))
