@@ -87,6 +87,34 @@ pub(crate) struct Fit<'a> {
     pub(crate) relative: f64,
 }
 
+impl Fit<'_> {
+    /// The box of vertex `v`: around its start and end positions, loosened by the margin and
+    /// rounded outward.
+    #[inline]
+    fn vertex(&self, v: usize) -> SmallBox {
+        let pad = DVec3::splat(self.margin);
+        let p = self.start[v];
+        let (lo, hi) = self
+            .end
+            .map_or((p, p), |end| (p.min(end[v]), p.max(end[v])));
+        outward(lo - pad, hi + pad)
+    }
+
+    /// The box of face `f`: the union of its corners' `vertices` boxes, loosened by
+    /// [`Fit::relative`].
+    #[inline]
+    fn face(&self, vertices: &[SmallBox], f: usize) -> SmallBox {
+        let corners =
+            &self.face_vertices[self.face_offsets[f] as usize..self.face_offsets[f + 1] as usize];
+        let b = corners
+            .iter()
+            .fold(EMPTY, |b, &v| union(&b, &vertices[v as usize]));
+        let (lo, hi) = widen(&b);
+        let pad = DVec3::splat(self.relative * (hi - lo).element_sum());
+        outward(lo - pad, hi + pad)
+    }
+}
+
 /// A node still to visit: a record, with the squared distance from the query to its box.
 pub(crate) type Pending = (u32, f64);
 
@@ -137,34 +165,19 @@ impl Boxes {
     /// Recomputes every box bottom-up from `fit`. Internal nodes are stored level by level,
     /// level `k` being `level_offsets[k]..level_offsets[k + 1]`.
     pub(crate) fn refit(&mut self, level_offsets: &[u32], fit: &Fit<'_>) {
-        let pad = DVec3::splat(fit.margin);
-        let vertex = |v: usize| {
-            let p = fit.start[v];
-            let (lo, hi) = fit.end.map_or((p, p), |end| (p.min(end[v]), p.max(end[v])));
-            outward(lo - pad, hi + pad)
-        };
         let count = fit.start.len();
         if count < PARALLEL_LEVEL {
             self.vertices.clear();
-            self.vertices.extend((0..count).map(vertex));
+            self.vertices.extend((0..count).map(|v| fit.vertex(v)));
         } else {
             (0..count)
                 .into_par_iter()
                 .with_min_len(REFIT_RUN)
-                .map(vertex)
+                .map(|v| fit.vertex(v))
                 .collect_into_vec(&mut self.vertices);
         }
         let vertices = &self.vertices[..];
-        let face_box = |f: usize| {
-            let corners =
-                &fit.face_vertices[fit.face_offsets[f] as usize..fit.face_offsets[f + 1] as usize];
-            let b = corners
-                .iter()
-                .fold(EMPTY, |b, &v| union(&b, &vertices[v as usize]));
-            let (lo, hi) = widen(&b);
-            let pad = DVec3::splat(fit.relative * (hi - lo).element_sum());
-            outward(lo - pad, hi + pad)
-        };
+        let face_box = |f: usize| fit.face(vertices, f);
         let child_box = |c: u32, done: &[Record]| {
             if c & LEAF != 0 {
                 face_box((c & !LEAF) as usize)
@@ -203,6 +216,43 @@ impl Boxes {
         self.root = match self.records.last() {
             Some(r) => union(&r.boxes[0], &r.boxes[1]),
             None => face_box(0),
+        };
+    }
+
+    /// Recomputes, after a refit from which only the vertices `moved` changed, the boxes those
+    /// vertices enter: theirs, those of the `faces` around them, and those of every record
+    /// above such a face. Every other box is a function of positions that did not change, so
+    /// the boxes end as [`Boxes::refit`] from `fit` leaves them, bit for bit, at a cost that
+    /// follows what moved.
+    pub(crate) fn refit_moved(&mut self, fit: &Fit<'_>, moved: &[u32], faces: &[u32]) {
+        for &v in moved {
+            self.vertices[v as usize] = fit.vertex(v as usize);
+        }
+        let mut stale = vec![false; self.records.len()];
+        for &f in faces {
+            let slot = self.leaf_slot[f as usize];
+            if slot == NONE {
+                continue;
+            }
+            let record = (slot >> 1) as usize;
+            self.records[record].boxes[(slot & 1) as usize] = fit.face(&self.vertices, f as usize);
+            stale[record] = true;
+        }
+        // A child's record precedes its parent's, so one pass in order carries every change up.
+        for r in 0..self.records.len() {
+            let parent = self.records[r].parent;
+            if !stale[r] || parent == NONE {
+                continue;
+            }
+            let [a, b] = &self.records[r].boxes;
+            let merged = union(a, b);
+            let side = usize::from(self.records[parent as usize].child[1] == r as u32);
+            self.records[parent as usize].boxes[side] = merged;
+            stale[parent as usize] = true;
+        }
+        self.root = match self.records.last() {
+            Some(r) => union(&r.boxes[0], &r.boxes[1]),
+            None => fit.face(&self.vertices, 0),
         };
     }
 

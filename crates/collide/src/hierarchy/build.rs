@@ -249,27 +249,7 @@ fn cancel_opposite(edges: &mut Vec<[u32; 2]>) {
 mod tests {
     use super::*;
     use crate::Point;
-
-    /// An `n × n` grid of unit quads in the plane z = 0, plus optionally a detached copy.
-    fn grid(n: u32, copies: u32) -> (Vec<Point>, Vec<u32>, Vec<u32>) {
-        let (mut positions, mut offsets, mut corners) = (Vec::new(), vec![0], Vec::new());
-        for copy in 0..copies {
-            let base = positions.len() as u32;
-            for j in 0..=n {
-                for i in 0..=n {
-                    positions.push(Point::new(i as f64, j as f64, 10.0 * copy as f64));
-                }
-            }
-            for j in 0..n {
-                for i in 0..n {
-                    let v = base + j * (n + 1) + i;
-                    corners.extend([v, v + 1, v + n + 2, v + n + 1]);
-                    offsets.push(corners.len() as u32);
-                }
-            }
-        }
-        (positions, offsets, corners)
-    }
+    use crate::hierarchy::grid;
 
     fn collect_leaves(h: &Hierarchy, node: u32, out: &mut Vec<u32>) {
         match h.node_children(node) {

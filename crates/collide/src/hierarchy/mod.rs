@@ -65,6 +65,8 @@ pub struct Hierarchy {
     pub(crate) start: Vec<DVec3>,
     /// Positions at the end of the step of a swept refit; empty after a static refit.
     end: Vec<DVec3>,
+    /// The margin of the last refit when it was swept.
+    swept_margin: Option<f64>,
 }
 
 impl Hierarchy {
@@ -101,6 +103,7 @@ impl Hierarchy {
             boxes: Boxes::default(),
             start,
             end: Vec::new(),
+            swept_margin: None,
         };
         hierarchy.leaf_counts = hierarchy.fold_up(|_| 1, |a, b| a + b);
         hierarchy.order_leaves();
@@ -397,6 +400,14 @@ pub(crate) fn convert_into(
     expected: usize,
     out: &mut Vec<DVec3>,
 ) -> Result<(), CollideError> {
+    check_positions(positions, expected)?;
+    out.clear();
+    out.extend(positions.iter().map(to_glam));
+    Ok(())
+}
+
+/// Checks that there are `expected` positions and that they are finite.
+pub(crate) fn check_positions(positions: &[Point], expected: usize) -> Result<(), CollideError> {
     if positions.len() != expected {
         return Err(CollideError::PositionCount {
             expected,
@@ -409,8 +420,6 @@ pub(crate) fn convert_into(
     {
         return Err(CollideError::NonFinitePosition { vertex });
     }
-    out.clear();
-    out.extend(positions.iter().map(to_glam));
     Ok(())
 }
 
@@ -421,4 +430,27 @@ pub(crate) fn check_distance(what: &'static str, value: f64) -> Result<(), Colli
     } else {
         Err(CollideError::BadDistance { what, value })
     }
+}
+
+/// For tests: `copies` detached `n × n` grids of unit quads, the first in the plane z = 0,
+/// each next one 10 above.
+#[cfg(test)]
+pub(crate) fn grid(n: u32, copies: u32) -> (Vec<Point>, Vec<u32>, Vec<u32>) {
+    let (mut positions, mut offsets, mut corners) = (Vec::new(), vec![0], Vec::new());
+    for copy in 0..copies {
+        let base = positions.len() as u32;
+        for j in 0..=n {
+            for i in 0..=n {
+                positions.push(Point::new(i as f64, j as f64, 10.0 * copy as f64));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let v = base + j * (n + 1) + i;
+                corners.extend([v, v + 1, v + n + 2, v + n + 1]);
+                offsets.push(corners.len() as u32);
+            }
+        }
+    }
+    (positions, offsets, corners)
 }
