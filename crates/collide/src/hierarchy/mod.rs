@@ -401,9 +401,14 @@ pub(crate) fn convert_into(
     out: &mut Vec<DVec3>,
 ) -> Result<(), CollideError> {
     check_positions(positions, expected)?;
+    store(positions, out);
+    Ok(())
+}
+
+/// Converts positions already checked to glam into `out`, reusing its allocation.
+pub(crate) fn store(positions: &[Point], out: &mut Vec<DVec3>) {
     out.clear();
     out.extend(positions.iter().map(to_glam));
-    Ok(())
 }
 
 /// Checks that there are `expected` positions and that they are finite.

@@ -19,7 +19,7 @@
 use parry3d_f64::math::Vector as DVec3;
 
 use super::boxes::Fit;
-use super::{Hierarchy, check_distance, check_positions, convert_into};
+use super::{Hierarchy, check_distance, check_positions, convert_into, store};
 use crate::Point;
 use crate::ccd::CONTACT_SLACK;
 use crate::convert::{to_glam, to_point};
@@ -87,10 +87,8 @@ impl Hierarchy {
                 return Ok(());
             }
         }
-        for (to, from) in [(&mut self.start, start), (&mut self.end, end)] {
-            to.clear();
-            to.extend(from.iter().map(to_glam));
-        }
+        store(start, &mut self.start);
+        store(end, &mut self.end);
         self.refit_boxes(margin);
         self.swept_margin = Some(margin);
         Ok(())
