@@ -213,10 +213,7 @@ impl Boxes {
         } else {
             rayon::scope(|_| fit_all());
         }
-        self.root = match self.records.last() {
-            Some(r) => union(&r.boxes[0], &r.boxes[1]),
-            None => face_box(0),
-        };
+        self.fit_root(fit);
     }
 
     /// Recomputes, after a refit from which only the vertices `moved` changed, the boxes those
@@ -250,6 +247,11 @@ impl Boxes {
             self.records[parent as usize].boxes[side] = merged;
             stale[parent as usize] = true;
         }
+        self.fit_root(fit);
+    }
+
+    /// The root's box from its record's two, or from the single face's when there is none.
+    fn fit_root(&mut self, fit: &Fit<'_>) {
         self.root = match self.records.last() {
             Some(r) => union(&r.boxes[0], &r.boxes[1]),
             None => fit.face(&self.vertices, 0),
