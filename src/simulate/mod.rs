@@ -200,8 +200,23 @@ fn simulate(args: &Args) -> Result<Outcome> {
     let last = range.end.unwrap_or(scene.frames);
     let dir = args.out.clone().unwrap_or_else(|| scene.output.dir.clone());
     let out = &scene.output;
-    let cloth = Surface::new(&scene.cloth.doc.mesh, out.level, out.limit_normals)?;
-    let mut shot = Shot::new(&scene, &cloth)?;
+    // The written cloth surface, the simulator and the refined body do not need each other
+    // to be made: they are made at once.
+    let (cloth, (simulator, body)) = rayon::join(
+        || Surface::new(&scene.cloth.doc.mesh, out.level, out.limit_normals),
+        || {
+            rayon::join(
+                || Shot::simulator(&scene),
+                || {
+                    let body = scene.body.as_ref();
+                    body.map(|b| Surface::new(&b.rest, b.level, false))
+                        .transpose()
+                },
+            )
+        },
+    );
+    let (cloth, simulator, body) = (cloth?, simulator?, body?);
+    let mut shot = Shot::new(&scene, simulator, &cloth, body.clone())?;
     let vertex_count = scene.cloth.doc.mesh.vertex_count();
     let resumed = if args.resume {
         checkpoint::load(&dir, &scene.fingerprint, vertex_count)?
@@ -254,7 +269,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
         u64::from(last.saturating_sub(next) + 1),
         args.quiet || next > last,
     );
-    let mut output = Output::new(&scene, &dir, first, stats, cloth)?;
+    let mut output = Output::new(&scene, &dir, first, stats, cloth, body)?;
     let mut simulate = |deliver: &mut dyn FnMut(Simulated) -> bool| {
         run_frames(&mut shot, &mut state, next..=last, args, &progress, deliver)
     };
@@ -426,6 +441,11 @@ struct BodyTrack {
     posed: Vec<Point>,
 }
 
+/// The context of an error in making the simulator of `scene`'s garment.
+fn building_cloth(scene: &Scene) -> String {
+    format!("building the cloth model of {}", scene.cloth.path.display())
+}
+
 /// Everything built once for a shot.
 struct Shot<'a> {
     scene: &'a Scene,
@@ -436,10 +456,11 @@ struct Shot<'a> {
 }
 
 impl<'a> Shot<'a> {
-    /// The shot of `scene`, whose garment writes `cloth`.
-    fn new(scene: &'a Scene, cloth: &Surface) -> Result<Self> {
+    /// The simulator of `scene`'s garment, its pins set, without its collision surface or
+    /// the body.
+    fn simulator(scene: &Scene) -> Result<Simulator> {
         let c = &scene.cloth;
-        let in_cloth = || format!("building the cloth model of {}", c.path.display());
+        let in_cloth = || building_cloth(scene);
         let mut model = Model::new(&c.doc.mesh, &c.material).with_context(in_cloth)?;
         for (which, values) in &c.multipliers {
             model
@@ -460,6 +481,18 @@ impl<'a> Shot<'a> {
         simulator
             .pin(&c.pins, Motion::Fixed)
             .with_context(in_cloth)?;
+        Ok(simulator)
+    }
+
+    /// The shot of `scene` from its `simulator` (see [`Self::simulator`]), whose garment
+    /// writes `cloth`, against the refined `body` of the scene's.
+    fn new(
+        scene: &'a Scene,
+        mut simulator: Simulator,
+        cloth: &Surface,
+        body: Option<Surface>,
+    ) -> Result<Self> {
+        let c = &scene.cloth;
         // The written faces at every level, the control mesh's own at level 0: the lift moves
         // control points after the garment's self tests, and only the written surface's
         // self tests, alternating with the lift, keep what is written clear.
@@ -467,10 +500,9 @@ impl<'a> Shot<'a> {
         let faces = Some((refined.face_offsets(), refined.face_vertices()));
         simulator
             .set_collision_surface(cloth.stencils().clone(), faces)
-            .with_context(in_cloth)?;
-        let body = match &scene.body {
-            Some(b) => {
-                let surface = Surface::new(&b.rest, b.level, false)?;
+            .with_context(|| building_cloth(scene))?;
+        let body = match body {
+            Some(surface) => {
                 let bindings = Bindings::new(
                     surface.hierarchy(),
                     surface.mesh().positions(),
@@ -571,11 +603,8 @@ impl<'a> Output<'a> {
         first: u32,
         stats: Vec<FrameStats>,
         cloth: Surface,
+        body: Option<Surface>,
     ) -> Result<Self> {
-        let body = match &scene.body {
-            Some(b) => Some(Surface::new(&b.rest, b.level, false)?),
-            None => None,
-        };
         let out = &scene.output;
         let precision = out.precision;
         let doc = &scene.cloth.doc;

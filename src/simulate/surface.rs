@@ -30,6 +30,7 @@ use crate::output::write_atomically;
 const ROUNDING_APART_TRIES: usize = 4;
 
 /// A refined surface of a fixed control topology.
+#[derive(Clone)]
 pub struct Surface {
     /// The refined points over the control points: regular faces as bicubic patches, stencil
     /// rows elsewhere (the same points as the stencil table's, faster).

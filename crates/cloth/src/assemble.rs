@@ -93,9 +93,15 @@ struct Gather {
 }
 
 impl Gather {
-    /// From (output, slot, weight) triples, in output then slot order.
+    /// From (output, slot, weight) triples, each (output, slot) once, in output then slot
+    /// order (so the parallel sort has only one order to find).
     fn new(outputs: usize, mut triples: Vec<(u32, u32, f64)>) -> Self {
-        triples.sort_unstable_by_key(|&(out, slot, _)| (out, slot));
+        triples.par_sort_unstable_by_key(|&(out, slot, _)| (out, slot));
+        debug_assert!(
+            triples
+                .windows(2)
+                .all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1))
+        );
         let pairs = triples.iter().map(|&(out, slot, _)| (out, slot));
         Self {
             sources: Csr::group_by(outputs, pairs),

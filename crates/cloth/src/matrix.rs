@@ -88,7 +88,8 @@ impl<T: Precision> BlockMatrix<T> {
             all.push((i, j));
             all.push((j, i));
         }
-        all.sort_unstable();
+        // Equal pairs are equal values, so the parallel sort's order is the only one.
+        all.par_sort_unstable();
         all.dedup();
         let pattern = Csr::group_by(n, all.iter().copied());
         let mirrored = |&(i, j): &(u32, u32)| symmetric && j < i;
