@@ -32,7 +32,7 @@ use tailor_subdiv::Point;
 use tailor_subdiv::csr::Csr;
 
 use crate::energy::{self, Local, Mat3, Vec3};
-use crate::matrix::BlockMatrix;
+use crate::matrix::{BlockMatrix, sorted_rows};
 use crate::model::Model;
 use crate::reduce::{partial_count, sum_by};
 
@@ -94,18 +94,16 @@ struct Gather {
 
 impl Gather {
     /// From (output, slot, weight) triples, each (output, slot) once, in output then slot
-    /// order (so the parallel sort has only one order to find).
-    fn new(outputs: usize, mut triples: Vec<(u32, u32, f64)>) -> Self {
-        triples.par_sort_unstable_by_key(|&(out, slot, _)| (out, slot));
-        debug_assert!(
-            triples
-                .windows(2)
-                .all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1))
-        );
-        let pairs = triples.iter().map(|&(out, slot, _)| (out, slot));
+    /// order.
+    fn new(outputs: usize, triples: &[(u32, u32, f64)]) -> Self {
+        let sources = triples.iter().map(|&(out, slot, w)| (out, (slot, w)));
+        let (offsets, sources) = sorted_rows(outputs, sources, |&(slot, _)| slot);
         Self {
-            sources: Csr::group_by(outputs, pairs),
-            weights: triples.iter().map(|&(_, _, w)| w).collect(),
+            sources: Csr {
+                offsets,
+                items: sources.iter().map(|&(slot, _)| slot).collect(),
+            },
+            weights: sources.iter().map(|&(_, w)| w).collect(),
         }
     }
 
@@ -228,7 +226,7 @@ impl Assembly {
         // Only the blocks on and above the diagonal are summed: each below is the transpose
         // of its mirror, the same terms transposed (every element's d-space Hessian is
         // symmetric).
-        let slot_triples = block_triples
+        let slot_triples: Vec<_> = block_triples
             .iter()
             .filter_map(|&((a, b), local, w)| {
                 let slot = matrix.slot(a, b).expect("element pair in pattern");
@@ -238,8 +236,8 @@ impl Assembly {
             .collect();
         let elements = s.verts.len() + q.verts.len() + t.verts.len();
         Self {
-            blocks: Gather::new(matrix.values().len(), slot_triples),
-            forces: Gather::new(n, force_triples),
+            blocks: Gather::new(matrix.values().len(), &slot_triples),
+            forces: Gather::new(n, &force_triples),
             local_grad: vec![Vec3::zeros(); gs + gq + t.verts.len()],
             local_hess: vec![Mat3::zeros(); hs + hq + t.verts.len()],
             energy: vec![0.0; elements],

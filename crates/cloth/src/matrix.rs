@@ -24,7 +24,7 @@
 
 use nalgebra::Matrix3;
 use rayon::prelude::*;
-use tailor_subdiv::csr::Csr;
+use tailor_subdiv::csr::{Csr, group_into};
 
 use crate::energy::{Mat3, Vec3};
 use crate::reduce::CHUNK;
@@ -83,14 +83,19 @@ impl<T: Precision> BlockMatrix<T> {
     }
 
     fn new(n: usize, pairs: impl IntoIterator<Item = (u32, u32)>, symmetric: bool) -> Self {
-        let mut all: Vec<(u32, u32)> = (0..n as u32).map(|i| (i, i)).collect();
+        let mut both: Vec<(u32, u32)> = (0..n as u32).map(|i| (i, i)).collect();
         for (i, j) in pairs {
-            all.push((i, j));
-            all.push((j, i));
+            both.push((i, j));
+            both.push((j, i));
         }
-        // Equal pairs are equal values, so the parallel sort's order is the only one.
-        all.par_sort_unstable();
-        all.dedup();
+        let (offsets, columns) = sorted_rows(n, both.iter().copied(), |&j| j);
+        let mut all = Vec::with_capacity(columns.len());
+        for (i, row) in offsets.windows(2).enumerate() {
+            let row = &columns[row[0] as usize..row[1] as usize];
+            let first = row.iter().enumerate();
+            let new = first.filter(|&(k, j)| k == 0 || row[k - 1] != *j);
+            all.extend(new.map(|(_, &j)| (i as u32, j)));
+        }
         let pattern = Csr::group_by(n, all.iter().copied());
         let mirrored = |&(i, j): &(u32, u32)| symmetric && j < i;
         let slot_of: Vec<u32> = (0..all.len() as u32)
@@ -275,6 +280,36 @@ impl<T: Precision> BlockMatrix<T> {
             *yi = sum;
         }
     }
+}
+
+/// The items of `pairs` grouped by their rows (`rows` of them), each row sorted by `key`: for
+/// items whose keys differ within a row, the order one sort by (row, key) gives, found by
+/// bucketing the items into rows first and sorting the rows in parallel, each a few items
+/// (a matrix row's columns, a block's sources). Returns the rows' offsets and the items.
+pub(crate) fn sorted_rows<T, I>(
+    rows: usize,
+    pairs: I,
+    key: impl Fn(&T) -> u32 + Sync,
+) -> (Vec<u32>, Vec<T>)
+where
+    T: Copy + Default + Send,
+    I: IntoIterator<Item = (u32, T)>,
+    I::IntoIter: Clone,
+{
+    let (mut offsets, mut items) = (Vec::new(), Vec::new());
+    group_into(rows, pairs, &mut offsets, &mut items);
+    let mut slices = Vec::with_capacity(rows);
+    let mut rest = items.as_mut_slice();
+    for row in offsets.windows(2) {
+        let (slice, tail) = rest.split_at_mut((row[1] - row[0]) as usize);
+        slices.push(slice);
+        rest = tail;
+    }
+    slices
+        .into_par_iter()
+        .with_min_len(CHUNK / 16)
+        .for_each(|slice| slice.sort_unstable_by_key(&key));
+    (offsets, items)
 }
 
 /// A stored block in double precision.
