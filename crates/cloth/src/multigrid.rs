@@ -412,6 +412,11 @@ impl Multigrid {
         level.r.iter().zip(&level.x).map(|(r, e)| r.dot(e)).sum()
     }
 
+    /// Whether there are coarse levels (none for a garment too small to coarsen).
+    pub fn has_coarse_levels(&self) -> bool {
+        !self.levels.is_empty()
+    }
+
     /// The coarse correction of the last [`Self::coarse_cycle`] at fine particle `i`,
     /// unfiltered: its aggregate's (zero without coarse levels).
     pub fn correction(&self, i: usize) -> Vec3 {
