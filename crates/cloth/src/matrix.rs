@@ -88,15 +88,25 @@ impl<T: Precision> BlockMatrix<T> {
             both.push((i, j));
             both.push((j, i));
         }
+        // Each row's sorted columns, a repeated one once: the pattern, already grouped by row.
         let (offsets, columns) = sorted_rows(n, both.iter().copied(), |&j| j);
-        let mut all = Vec::with_capacity(columns.len());
-        for (i, row) in offsets.windows(2).enumerate() {
-            let row = &columns[row[0] as usize..row[1] as usize];
-            let first = row.iter().enumerate();
-            let new = first.filter(|&(k, j)| k == 0 || row[k - 1] != *j);
-            all.extend(new.map(|(_, &j)| (i as u32, j)));
+        let mut pattern = Csr {
+            offsets: Vec::with_capacity(n + 1),
+            items: Vec::with_capacity(columns.len()),
+        };
+        pattern.offsets.push(0);
+        for row in offsets.windows(2) {
+            let start = pattern.items.len();
+            for &j in &columns[row[0] as usize..row[1] as usize] {
+                if pattern.items.len() == start || pattern.items.last() != Some(&j) {
+                    pattern.items.push(j);
+                }
+            }
+            pattern.offsets.push(pattern.items.len() as u32);
         }
-        let pattern = Csr::group_by(n, all.iter().copied());
+        let all: Vec<(u32, u32)> = (0..n)
+            .flat_map(|i| pattern.row(i).iter().map(move |&j| (i as u32, j)))
+            .collect();
         let mirrored = |&(i, j): &(u32, u32)| symmetric && j < i;
         let slot_of: Vec<u32> = (0..all.len() as u32)
             .filter(|&s| !mirrored(&all[s as usize]))
