@@ -169,6 +169,28 @@ mod tests {
         }
     }
 
+    /// The distance to the box bounds the signed distance from below outside the box, and
+    /// is 0 within it.
+    #[test]
+    fn the_box_distance_bounds_the_signed_distance_outside_the_box() {
+        let h = cube();
+        let queries = [
+            Point::new(0.5, 0.5, 0.5),
+            Point::new(1.5, 0.5, 0.5),
+            Point::new(2.0, 2.0, 0.5),
+            Point::new(-0.3, 1.7, 2.0),
+        ];
+        let exact = h.signed_distances(&queries).unwrap();
+        let boxed: Vec<f64> = queries.iter().map(|q| h.box_distance(q)).collect();
+        assert_eq!(boxed[0], 0.0);
+        for (q, (b, d)) in queries.iter().zip(boxed.iter().zip(&exact)).skip(1) {
+            assert!(*b > 0.0 && *b <= *d, "{q}: box {b}, signed {d}");
+        }
+        // On the cube the box is the body's, loosened by rounding outward: the bound is
+        // nearly exact off its faces.
+        assert!((boxed[1] - 0.5).abs() < 1e-6, "{}", boxed[1]);
+    }
+
     #[test]
     fn open_mesh_has_no_inside() {
         let p = [

@@ -284,6 +284,11 @@ impl Boxes {
         self.root
     }
 
+    /// The distance from `q` to the root's box, 0 inside it.
+    pub(crate) fn root_distance(&self, q: DVec3) -> f64 {
+        distance2(&self.root, q).sqrt()
+    }
+
     /// The references and boxes of the two children of record `r`: a child's record index,
     /// or `LEAF | face`.
     pub(crate) fn record(&self, r: u32) -> ([u32; 2], &[SmallBox; 2]) {

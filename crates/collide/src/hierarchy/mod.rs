@@ -163,6 +163,16 @@ impl Hierarchy {
             .fold(0.0, |m: f64, &c| m.max(f64::from(c.abs())))
     }
 
+    /// The distance from `q` to the box around every face at the last refit (its margin and
+    /// sweep included, rounded outward), 0 inside it: a lower bound of `q`'s distance to the
+    /// mesh, and for a point outside the box of a closed mesh, of its signed distance, as
+    /// nothing of the mesh lies outside it. One box test, where the closest point of a query
+    /// far from the mesh searches many of its faces. NaN for a point with a NaN coordinate.
+    #[must_use]
+    pub fn box_distance(&self, q: &Point) -> f64 {
+        self.boxes.root_distance(to_glam(q))
+    }
+
     /// Number of levels above the leaves: about `log2` of the face count.
     #[must_use]
     pub fn depth(&self) -> usize {
