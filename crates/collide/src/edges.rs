@@ -5,8 +5,11 @@
 //! The self-traversal pairs faces whose boxes come within the distance of each other (no
 //! normal-cone culling: a flat region can be closer to itself than a distance without
 //! touching), and a pair of faces `(f, g)` tests the edges *owned* by `f` against those owned
-//! by `g` (see [`crate::topology`]), so each pair of edges is tested once. The closest points
-//! between two segments are Ericson's (*Real-Time Collision Detection*, §5.1.9).
+//! by `g` (see [`crate::topology`]), so each pair of edges is tested once. Neighbouring faces
+//! are most of those pairs, and an edge with an end on the other face is skipped there by the
+//! rule below whatever the positions, so such edges are left out before any geometry (on the
+//! 64² drape, a sixth of the query). The closest points between two segments are Ericson's
+//! (*Real-Time Collision Detection*, §5.1.9).
 //!
 //! As the vertex–face pairs do ([`crate::local`]), a query may leave out the pairs the rest
 //! shape holds that near: given the table of faces around each vertex, an edge is skipped
@@ -86,12 +89,20 @@ impl Hierarchy {
     ) -> Result<(), CollideError> {
         check_distance("distance", distance)?;
         let users = self.vertex_faces();
+        let edges = &self.topology.edges;
+        // An edge with an end on the other face lies on a face around that end, as the other
+        // edge lies on the other face: such pairs, and so every pair within one face, are
+        // skipped before their geometry is looked at.
+        let off = |e: u32, face: &[u32]| !edges[e as usize].iter().any(|v| face.contains(v));
         let visit = |a: u32, b: u32, out: &mut Vec<EdgeProximity>| {
+            if a == b {
+                return;
+            }
             let (f, g) = (a.min(b), a.max(b));
+            let (face_f, face_g) = (self.topology.face(f), self.topology.face(g));
             let (mine, theirs) = (self.topology.owned_edges(f), self.topology.owned_edges(g));
-            for (i, &e) in mine.iter().enumerate() {
-                let theirs = if f == g { &theirs[i + 1..] } else { theirs };
-                for &o in theirs {
+            for &e in mine.iter().filter(|&&e| off(e, face_g)) {
+                for &o in theirs.iter().filter(|&&o| off(o, face_f)) {
                     let (e, o) = (e.min(o), e.max(o));
                     if let Some(near) = self.edges_near(e, o, distance)
                         && !self.edges_around(e, o, skip, users)
