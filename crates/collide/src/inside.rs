@@ -189,6 +189,10 @@ mod tests {
         // On the cube the box is the body's, loosened by rounding outward: the bound is
         // nearly exact off its faces.
         assert!((boxed[1] - 0.5).abs() < 1e-6, "{}", boxed[1]);
+        // A point that is not finite is bounded by nothing.
+        for bad in [f64::NAN, f64::INFINITY] {
+            assert!(h.box_distance(&Point::new(bad, 5.0, 0.5)).is_nan());
+        }
     }
 
     #[test]

@@ -167,10 +167,15 @@ impl Hierarchy {
     /// sweep included, rounded outward), 0 inside it: a lower bound of `q`'s distance to the
     /// mesh, and for a point outside the box of a closed mesh, of its signed distance, as
     /// nothing of the mesh lies outside it. One box test, where the closest point of a query
-    /// far from the mesh searches many of its faces. NaN for a point with a NaN coordinate.
+    /// far from the mesh searches many of its faces. NaN for a point that is not finite, which
+    /// bounds nothing (the queries that measure report such a point as an error).
     #[must_use]
     pub fn box_distance(&self, q: &Point) -> f64 {
-        self.boxes.root_distance(to_glam(q))
+        if q.coords.iter().all(|c| c.is_finite()) {
+            self.boxes.root_distance(to_glam(q))
+        } else {
+            f64::NAN
+        }
     }
 
     /// Number of levels above the leaves: about `log2` of the face count.
