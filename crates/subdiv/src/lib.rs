@@ -58,4 +58,4 @@ pub use mesh::{
 pub use options::{BoundaryInterpolation, CreaseMethod, FVarLinear, Options, TriangleRule};
 pub use refiner::{Limit, Refiner, subdivide};
 pub use sparse::{Primvar, SharedRows, SparseRows};
-pub use stencil::StencilTable;
+pub use stencil::{Refreshed, StencilTable};

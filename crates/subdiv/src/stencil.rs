@@ -14,9 +14,10 @@
 
 use rayon::prelude::*;
 
+use crate::csr::Csr;
 use crate::mesh::to_u32;
 use crate::refine::Refinement;
-use crate::sparse::{CHUNK, Primvar, SharedRows, SharedRowsBuilder, SparseRows};
+use crate::sparse::{CHUNK, Primvar, SharedRows, SharedRowsBuilder, SparseRows, weighted_sum};
 use crate::topology::Level;
 
 /// Rows of weights over the control points.
@@ -117,6 +118,95 @@ impl StencilTable {
     #[must_use]
     pub fn bytes(&self) -> usize {
         self.rows.bytes()
+    }
+}
+
+/// A stencil table's output for control points that move a few at a time (the collision
+/// passes of a substep move the control points they push, lift or relax, and ask for the
+/// refined surface again): after the first evaluation, only the rows that read a control
+/// point whose bits changed since the last are computed again, by the arithmetic of
+/// [`StencilTable::apply`], so the points are the same bits as applying the whole table.
+#[derive(Clone, Debug, Default)]
+pub struct Refreshed<T> {
+    /// Per control point, the rows that read it (the table's columns transposed).
+    readers: Csr,
+    /// The control points of the last evaluation; empty before the first.
+    control: Vec<T>,
+    points: Vec<T>,
+    /// The rows to compute again, each once.
+    rows: Vec<u32>,
+    listed: Vec<bool>,
+}
+
+impl<T: Primvar> Refreshed<T> {
+    /// Nothing evaluated yet, for `table`'s rows.
+    #[must_use]
+    pub fn new(table: &StencilTable) -> Self {
+        let readers = Csr::group_by(
+            table.control_points,
+            (0..table.len()).flat_map(|r| table.rows.row(r).0.iter().map(move |&c| (c, to_u32(r)))),
+        );
+        Self {
+            readers,
+            control: Vec::new(),
+            points: Vec::new(),
+            rows: Vec::new(),
+            listed: vec![false; table.len()],
+        }
+    }
+
+    /// The points of the last [`Self::update`].
+    #[must_use]
+    pub fn points(&self) -> &[T] {
+        &self.points
+    }
+
+    /// `table` (the one this was made for) applied to `control`: all of it the first time,
+    /// after that the rows reading a control point that changed, or all of it in parallel
+    /// when a quarter of the rows do.
+    ///
+    /// # Panics
+    /// If `control` does not have the table's control point count.
+    pub fn update(&mut self, table: &StencilTable, control: &[T]) -> &[T] {
+        assert_eq!(control.len(), table.control_points, "control point count");
+        let n = table.len();
+        if self.control.len() == control.len() {
+            let same = |a: &T, b: &T| {
+                a.components()
+                    .iter()
+                    .zip(b.components())
+                    .all(|(x, y)| x.to_bits() == y.to_bits())
+            };
+            self.rows.clear();
+            for (j, (was, is)) in self.control.iter().zip(control).enumerate() {
+                if same(was, is) {
+                    continue;
+                }
+                for &r in self.readers.row(j) {
+                    if !std::mem::replace(&mut self.listed[r as usize], true) {
+                        self.rows.push(r);
+                    }
+                }
+                if self.rows.len() > n / 4 {
+                    break;
+                }
+            }
+            for &r in &self.rows {
+                self.listed[r as usize] = false;
+            }
+            if self.rows.len() <= n / 4 {
+                for &r in &self.rows {
+                    self.points[r as usize] = weighted_sum(table.rows.row(r as usize), control);
+                }
+                self.control.copy_from_slice(control);
+                return &self.points;
+            }
+        }
+        self.points.resize(n, T::zero());
+        table.apply(control, &mut self.points);
+        self.control.clear();
+        self.control.extend_from_slice(control);
+        &self.points
     }
 }
 

@@ -19,7 +19,7 @@
 //! Every sum runs in a fixed order, so the result does not depend on the thread count.
 
 use tailor_collide::{Closest, CollideError, DistanceBounds, Hierarchy};
-use tailor_subdiv::{Point, StencilTable};
+use tailor_subdiv::{Point, Refreshed, StencilTable};
 
 use super::obstacle::away_from;
 use super::surface_layers::SurfaceLayers;
@@ -56,7 +56,8 @@ pub(crate) struct Surface {
     stencils: StencilTable,
     /// The refined faces, when the surface must not pass through itself either.
     layers: Option<SurfaceLayers>,
-    points: Vec<Point>,
+    /// The refined points, computed again where the control points moved.
+    points: Refreshed<Point>,
     /// What the body's hierarchy answered for each refined point at its last measure: its
     /// closest point within the thickness.
     closest: Vec<Option<Closest>>,
@@ -79,7 +80,7 @@ impl Surface {
     pub fn new(stencils: StencilTable, layers: Option<SurfaceLayers>) -> Self {
         let n = stencils.control_points;
         Self {
-            points: vec![Point::origin(); stencils.len()],
+            points: Refreshed::new(&stencils),
             closest: vec![None; stencils.len()],
             bounds: DistanceBounds::default(),
             moved: Vec::new(),
@@ -109,9 +110,9 @@ impl Surface {
         // thickness, far less than the margin's factor of two covers).
         let mut clear = thickness;
         for round in 0..ROUNDS {
-            self.stencils.apply(m.x, &mut self.points);
+            let points = self.points.update(&self.stencils, m.x);
             if round == 0 {
-                let cloth = self.points.iter().map(|p| p.coords.amax());
+                let cloth = points.iter().map(|p| p.coords.amax());
                 let largest = cloth.fold(0.0, f64::max) + body.largest_coordinate();
                 clear += ROUNDING * largest;
             }
@@ -124,7 +125,7 @@ impl Surface {
             let mut any = false;
             for (k, c) in closest.iter().enumerate() {
                 let Some(c) = c else { continue };
-                let (normal, distance) = away_from(self.points[k], c);
+                let (normal, distance) = away_from(self.points.points()[k], c);
                 if distance >= clear {
                     continue;
                 }
@@ -194,10 +195,10 @@ impl Surface {
     /// measuring every point within `clear`.
     fn measure(&mut self, body: &Hierarchy, clear: f64) -> Result<(), CollideError> {
         self.bounds
-            .stale(body, &self.points, clear, &mut self.moved);
+            .stale(body, self.points.points(), clear, &mut self.moved);
         self.queries.clear();
         self.queries
-            .extend(self.moved.iter().map(|&k| self.points[k as usize]));
+            .extend(self.moved.iter().map(|&k| self.points.points()[k as usize]));
         let reach = REACH * clear;
         body.closest_points_into(&self.queries, reach, &mut self.answers)?;
         for (&k, answer) in self.moved.iter().zip(&self.answers) {
@@ -271,7 +272,7 @@ mod tests {
         lift(&mut fresh, &body, &mut y);
         assert_eq!(x, y);
         assert_eq!(surface.closest, fresh.closest);
-        for (k, p) in fresh.points.iter().enumerate() {
+        for (k, p) in fresh.points.points().iter().enumerate() {
             let c = fresh.closest[k].map_or(f64::INFINITY, |c| c.distance);
             assert!(
                 c >= 0.005 * (1.0 - 1e-9),

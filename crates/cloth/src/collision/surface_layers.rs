@@ -25,7 +25,7 @@
 //! them.
 
 use tailor_collide::{CollideError, Hierarchy};
-use tailor_subdiv::{Point, StencilTable};
+use tailor_subdiv::{Point, Refreshed, StencilTable};
 
 use super::self_collision::{Pair, SEPARATION, SelfImpacts, ZONE_ROUNDS, Zones};
 use crate::substep::Substep;
@@ -36,7 +36,9 @@ use crate::substep::Substep;
 pub(super) struct SurfaceLayers {
     hierarchy: Hierarchy,
     start: Vec<Point>,
-    end: Vec<Point>,
+    /// The refined points at the end of the straight paths, computed again where the control
+    /// points moved.
+    end: Refreshed<Point>,
     impacts: SelfImpacts,
     /// The control points an impulse round changed.
     touched: Vec<bool>,
@@ -60,7 +62,7 @@ impl SurfaceLayers {
         let hierarchy = Hierarchy::build(&start, face_offsets, face_vertices)?;
         Ok(Self {
             hierarchy,
-            end: start.clone(),
+            end: Refreshed::new(stencils),
             start,
             impacts: SelfImpacts::default(),
             touched: vec![false; rest.len()],
@@ -78,9 +80,8 @@ impl SurfaceLayers {
     /// The refined impacts of the straight paths from the start to the control points `x`;
     /// whether there is any.
     fn query(&mut self, stencils: &StencilTable, x: &[Point]) -> Result<bool, CollideError> {
-        stencils.apply(x, &mut self.end);
-        self.impacts
-            .query(&mut self.hierarchy, &self.start, &self.end)
+        let end = self.end.update(stencils, x);
+        self.impacts.query(&mut self.hierarchy, &self.start, end)
     }
 
     /// One round of impulses, as [`super::self_collision::impulse_round`] on the control
@@ -108,7 +109,7 @@ impl SurfaceLayers {
         touched.fill(false);
         let mut handled = 0;
         for pair in Pair::list(hierarchy, &impacts.impacts) {
-            let Some((normal, gap)) = pair.normal_and_gap(start, end) else {
+            let Some((normal, gap)) = pair.normal_and_gap(start, end.points()) else {
                 continue;
             };
             control_weights(stencils, &pair, terms, vertices, alpha);
