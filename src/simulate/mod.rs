@@ -274,13 +274,15 @@ fn simulate(args: &Args) -> Result<Outcome> {
         run_frames(&mut shot, &mut state, next..=last, args, &progress, deliver)
     };
     // Checking and writing a frame overlap the simulation of the next on a thread of their
-    // own, when the pool has threads to spare for it.
+    // own, when the pool has threads to spare for it, at the lowest priority (see
+    // `yield_to_the_simulation`).
     let (simulated, output) = if rayon::current_num_threads() > 1 {
         std::thread::scope(|scope| {
             let (frames, received) = mpsc::sync_channel::<Simulated>(1);
             let writer = scope.spawn(move || {
                 let pool = rayon::ThreadPoolBuilder::new()
                     .num_threads(1)
+                    .start_handler(|_| yield_to_the_simulation())
                     .build()
                     .context("starting the output thread")?;
                 pool.install(|| {
@@ -572,6 +574,33 @@ impl<'a> Shot<'a> {
     }
 }
 
+/// Gives the calling thread (the output thread) the lowest scheduling priority, nice 19, so
+/// that it runs on what the simulation leaves idle rather than beside it.
+///
+/// The simulation keeps every core busy only part of the time: between its parallel passes it
+/// runs serial ones (strain limiting, the impulse rounds) on one thread and the other cores
+/// wait. At the default priority the output thread shares the cores with the simulation's
+/// workers when they are all busy and delays them; at nice 19 the scheduler gives it the idle
+/// cycles first, and the whole process of the 64² drape at one substep on two cores took 8%
+/// less wall time (`docs/BENCHMARKS.md`), the same bytes written. The output thread cannot fall
+/// behind by more than a frame: the simulation waits for it then (the frames go through a
+/// channel of one), and the output thread, then the only one of the process with work, runs at
+/// full speed. Where the system shares the cores fairly between processes or their control
+/// groups first (Linux's autogroups, the cgroups of systemd and of farm schedulers), the
+/// priority counts only against the process's own threads, and other jobs on a shared
+/// machine cannot starve it.
+///
+/// Linux keeps a nice value per thread (`setpriority` on the thread's id); elsewhere the value
+/// is the process's, and this does nothing. A failure leaves the default priority, which is
+/// only slower, so it is not reported.
+fn yield_to_the_simulation() {
+    #[cfg(target_os = "linux")]
+    {
+        let lowest = 19;
+        let _ = rustix::process::setpriority_process(Some(rustix::thread::gettid()), lowest);
+    }
+}
+
 /// What is checked and written of each frame, with the figures of every frame so far.
 struct Output<'a> {
     scene: &'a Scene,
@@ -698,5 +727,27 @@ impl<'a> Output<'a> {
             surface.write(&name("body"), body.control(frame), text)?;
         }
         Ok(())
+    }
+}
+
+#[cfg(all(test, target_os = "linux"))]
+mod tests {
+    use rustix::process::getpriority_process;
+    use rustix::thread::gettid;
+
+    /// The output thread's priority drops to nice 19 and the thread that asked is the only one
+    /// whose priority changes (Linux keeps one per thread).
+    #[test]
+    fn only_the_output_thread_yields() {
+        let own = || getpriority_process(Some(gettid())).expect("the thread's priority");
+        let before = own();
+        let lowered = std::thread::spawn(move || {
+            super::yield_to_the_simulation();
+            own()
+        })
+        .join()
+        .expect("the thread ran");
+        assert_eq!(lowered, 19);
+        assert_eq!(own(), before);
     }
 }
