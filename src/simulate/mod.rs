@@ -580,9 +580,11 @@ impl<'a> Shot<'a> {
 /// The simulation keeps every core busy only part of the time: between its parallel passes it
 /// runs serial ones (strain limiting, the impulse rounds) on one thread and the other cores
 /// wait. At the default priority the output thread shares the cores with the simulation's
-/// workers when they are all busy and delays them; at nice 19 the scheduler gives it the idle
-/// cycles first, and the whole process of the 64² drape at one substep on two cores took 8%
-/// less wall time (`docs/BENCHMARKS.md`), the same bytes written. The output thread cannot fall
+/// workers when they are all busy and delays them; at nice 19 a worker the simulation wakes
+/// takes the core back sooner, and the whole process of the 64² drape at one substep on two
+/// cores took 8% less wall time (`docs/BENCHMARKS.md`), the same bytes written. It still
+/// costs: a thread running beside the simulation delays its fork-joins at any priority, so
+/// the output's CPU time is worth cutting too. The output thread cannot fall
 /// behind by more than a frame: the simulation waits for it then (the frames go through a
 /// channel of one), and the output thread, then the only one of the process with work, runs at
 /// full speed. Where the system shares the cores fairly between processes or their control
