@@ -280,12 +280,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
         std::thread::scope(|scope| {
             let (frames, received) = mpsc::sync_channel::<Simulated>(1);
             let writer = scope.spawn(move || {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(1)
-                    .start_handler(|_| yield_to_the_simulation())
-                    .build()
-                    .context("starting the output thread")?;
-                pool.install(|| {
+                output_pool()?.install(|| {
                     for done in received {
                         output.frame(done)?;
                     }
@@ -574,8 +569,17 @@ impl<'a> Shot<'a> {
     }
 }
 
-/// Gives the calling thread (the output thread) the lowest scheduling priority, nice 19, so
-/// that it runs on what the simulation leaves idle rather than beside it.
+/// The output thread: a pool of one thread of its own (so it never waits on the simulation's
+/// pool), at the lowest priority (see [`yield_to_the_simulation`]).
+fn output_pool() -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .start_handler(|_| yield_to_the_simulation())
+        .build()
+        .context("starting the output thread")
+}
+
+/// Gives the calling thread (the output thread) the lowest scheduling priority, nice 19.
 ///
 /// The simulation keeps every core busy only part of the time: between its parallel passes it
 /// runs serial ones (strain limiting, the impulse rounds) on one thread and the other cores
@@ -584,13 +588,13 @@ impl<'a> Shot<'a> {
 /// takes the core back sooner, and the whole process of the 64² drape at one substep on two
 /// cores took 8% less wall time (`docs/BENCHMARKS.md`), the same bytes written. It still
 /// costs: a thread running beside the simulation delays its fork-joins at any priority, so
-/// the output's CPU time is worth cutting too. The output thread cannot fall
-/// behind by more than a frame: the simulation waits for it then (the frames go through a
-/// channel of one), and the output thread, then the only one of the process with work, runs at
-/// full speed. Where the system shares the cores fairly between processes or their control
-/// groups first (Linux's autogroups, the cgroups of systemd and of farm schedulers), the
-/// priority counts only against the process's own threads, and other jobs on a shared
-/// machine cannot starve it.
+/// the output's CPU time is worth cutting too. The output thread cannot fall behind by more
+/// than a frame: the simulation waits for it then (the frames go through a channel of one),
+/// and the output thread, then the only one of the process with work, runs at full speed.
+/// Where the system shares the cores fairly between processes or their control groups first
+/// (Linux's autogroups, the cgroups of systemd and of farm schedulers), the priority counts
+/// only against the process's own threads, and other jobs on a shared machine cannot starve
+/// it.
 ///
 /// Linux keeps a nice value per thread (`setpriority` on the thread's id); elsewhere the value
 /// is the process's, and this does nothing. A failure leaves the default priority, which is
@@ -737,18 +741,14 @@ mod tests {
     use rustix::process::getpriority_process;
     use rustix::thread::gettid;
 
-    /// The output thread's priority drops to nice 19 and the thread that asked is the only one
-    /// whose priority changes (Linux keeps one per thread).
+    /// The output pool's thread runs at nice 19 and the thread that made the pool keeps its
+    /// priority (Linux keeps one per thread).
     #[test]
     fn only_the_output_thread_yields() {
         let own = || getpriority_process(Some(gettid())).expect("the thread's priority");
         let before = own();
-        let lowered = std::thread::spawn(move || {
-            super::yield_to_the_simulation();
-            own()
-        })
-        .join()
-        .expect("the thread ran");
+        let pool = super::output_pool().expect("the output thread");
+        let lowered = pool.install(own);
         assert_eq!(lowered, 19);
         assert_eq!(own(), before);
     }
