@@ -49,6 +49,8 @@ const UNREACHED: u32 = u32::MAX;
 pub(crate) struct StrainLimiter {
     /// Edges at each vertex.
     incident: Csr,
+    /// The other end of each edge of `incident`, entry for entry, for the breadth-first pass.
+    across: Vec<u32>,
     /// Edges by breadth-first depth from the sources, then the unreached ones.
     order: Vec<u32>,
     /// Each edge's place in `order`.
@@ -76,9 +78,21 @@ pub(crate) struct StrainLimiter {
 impl StrainLimiter {
     pub fn new(springs: &Springs, vertex_count: usize) -> Self {
         let ends = springs.verts.iter().enumerate();
-        let incident = ends.flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]);
+        let incident = Csr::group_by(
+            vertex_count,
+            ends.flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
+        );
+        let across = (0..vertex_count)
+            .flat_map(|v| {
+                incident.row(v).iter().map(move |&e| {
+                    let [a, b] = springs.verts[e as usize];
+                    if a as usize == v { b } else { a }
+                })
+            })
+            .collect();
         Self {
-            incident: Csr::group_by(vertex_count, incident),
+            incident,
+            across,
             order: (0..springs.verts.len() as u32).collect(),
             place: (0..springs.verts.len() as u32).collect(),
             depth: vec![UNREACHED; vertex_count],
@@ -115,12 +129,12 @@ impl StrainLimiter {
         while head < queue.len() {
             let v = queue[head] as usize;
             head += 1;
-            for &e in self.incident.row(v) {
-                let [a, b] = springs.verts[e as usize];
-                let other = if a as usize == v { b } else { a } as usize;
-                if self.depth[other] == UNREACHED {
-                    self.depth[other] = self.depth[v] + 1;
-                    queue.push(other as u32);
+            let next = self.depth[v] + 1;
+            for &other in &self.across[self.incident.range(v)] {
+                let d = &mut self.depth[other as usize];
+                if *d == UNREACHED {
+                    *d = next;
+                    queue.push(other);
                 }
             }
         }
