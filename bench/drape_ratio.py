@@ -71,6 +71,12 @@ def main():
     parser.add_argument("scene", help="the drape's scene (examples/drape_scene writes it)")
     parser.add_argument("n", type=int, help="vertices a side of the scene's sheet")
     parser.add_argument("--pairs", type=int, default=4)
+    parser.add_argument(
+        "--pause",
+        type=float,
+        default=2.0,
+        help="seconds to wait before each run, for the system to settle after the last",
+    )
     which = parser.add_mutually_exclusive_group()
     which.add_argument("--blender-python", default=sys.executable)
     which.add_argument("--blender", help="a Blender executable, run with -b")
@@ -78,7 +84,9 @@ def main():
 
     ratios = []
     for pair in range(1, args.pairs + 1):
+        time.sleep(args.pause)
         blender, stretch = run_blender(args)
+        time.sleep(args.pause)
         tailor, strain, not_clean = run_tailor(args)
         ratios.append(blender / tailor)
         print(
