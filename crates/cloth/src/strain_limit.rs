@@ -107,14 +107,16 @@ impl StrainLimiter {
         }
     }
 
+    /// Whether the edges are ordered from other vertices than those `source` flags.
+    fn sources_changed(&self, springs: &Springs, source: impl Fn(usize) -> bool) -> bool {
+        let same = (0..self.depth.len()).all(|v| self.sources[v] == source(v));
+        !same || self.order.len() != springs.verts.len()
+    }
+
     /// Orders the edges outwards from the vertices `source` flags (breadth first, a fixed
-    /// order), when that set changed since the last call; returns whether it did.
-    fn order_from(&mut self, springs: &Springs, source: impl Fn(usize) -> bool) -> bool {
+    /// order).
+    fn order_from(&mut self, springs: &Springs, source: impl Fn(usize) -> bool) {
         let n = self.depth.len();
-        let same = (0..n).all(|v| self.sources[v] == source(v));
-        if same && self.order.len() == springs.verts.len() {
-            return false;
-        }
         for (v, f) in self.sources.iter_mut().enumerate() {
             *f = source(v);
         }
@@ -149,7 +151,6 @@ impl StrainLimiter {
         for (k, &e) in self.order.iter().enumerate() {
             self.place[e as usize] = k as u32;
         }
-        true
     }
 
     /// Brings every edge of `springs` within `limit` (a fraction, e.g. 0.1) of its rest
@@ -201,20 +202,18 @@ impl StrainLimiter {
             ..
         } = m;
         let h = *h;
-        // The edges still pending from the last call, by edge: a new order moves their places.
-        let comparable = self.settled.len() == x.len()
-            && self.settled_limit == limit
-            && self.order.len() == springs.verts.len();
+        let comparable = self.settled.len() == x.len() && self.settled_limit == limit;
+        let source = |v: usize| inverse_mass[v] == 0.0 || moved.is_some_and(|moved| moved[v]);
+        let reordered = self.sources_changed(springs, source);
+        // The edges still pending from the last call, by edge: the new order moves their places.
         let mut carried = std::mem::take(&mut self.carried);
         carried.clear();
-        if comparable {
-            carried.extend(self.pending.places().map(|k| self.order[k]));
+        if reordered {
+            if comparable {
+                carried.extend(self.pending.places().map(|k| self.order[k]));
+            }
+            self.order_from(springs, source);
         }
-        let reordered = if let Some(moved) = moved {
-            self.order_from(springs, |v| inverse_mass[v] == 0.0 || moved[v])
-        } else {
-            self.order_from(springs, |v| inverse_mass[v] == 0.0)
-        };
         let Self {
             incident,
             order,
