@@ -41,7 +41,9 @@ def blender_command(args):
 
 def run_blender(args):
     """Blender's seconds for the simulated frames, and its worst stretch in percent."""
-    out = subprocess.run(blender_command(args), capture_output=True, text=True, check=True)
+    out = subprocess.run(blender_command(args), capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.exit(f"Blender failed (exit {out.returncode}):\n{out.stderr}")
     found = BLENDER_LINE.search(out.stdout)
     if found is None:
         sys.exit(f"no timing in Blender's output:\n{out.stdout}\n{out.stderr}")
