@@ -113,18 +113,8 @@ impl Hierarchy {
     /// # Panics
     /// If `moved` has fewer entries than the mesh has vertices.
     pub fn self_impacts_again(&self, moved: &[bool], out: &mut Impacts) {
+        let dirty = self.nodes_moved(moved);
         let topology = &self.topology;
-        let faces = self.face_count();
-        let mut dirty = vec![false; faces + self.children.len()];
-        for (f, d) in dirty[..faces].iter_mut().enumerate() {
-            let (lo, hi) = (topology.face_offsets[f], topology.face_offsets[f + 1]);
-            *d = topology.face_vertices[lo as usize..hi as usize]
-                .iter()
-                .any(|&v| moved[v as usize]);
-        }
-        for (i, [a, b]) in self.children.iter().enumerate() {
-            dirty[faces + i] = dirty[*a as usize] || dirty[*b as usize];
-        }
         let still = |v: &u32| !moved[*v as usize];
         let triangles = &topology.triangles;
         let unmoved = |found: &Found| match found {

@@ -235,10 +235,14 @@ impl Boxes {
             self.records[record].boxes[(slot & 1) as usize] = fit.face(&self.vertices, f as usize);
             stale[record] = true;
         }
-        // A child's record precedes its parent's, so one pass in order carries every change up.
+        // A child's record precedes its parent's, so one pass in order carries every change up;
+        // it reads only the flags of the records that did not change.
         for r in 0..self.records.len() {
+            if !stale[r] {
+                continue;
+            }
             let parent = self.records[r].parent;
-            if !stale[r] || parent == NONE {
+            if parent == NONE {
                 continue;
             }
             let [a, b] = &self.records[r].boxes;

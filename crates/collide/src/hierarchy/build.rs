@@ -280,6 +280,37 @@ mod tests {
         }
     }
 
+    /// The nodes marked for a set of moved vertices are exactly those with a face below them
+    /// that has a moved corner: none, one vertex, a scattered few, all; one face and many.
+    #[test]
+    fn nodes_moved_are_those_with_a_moved_corner_below() {
+        for (n, copies) in [(1, 1), (9, 2)] {
+            let (p, o, c) = grid(n, copies);
+            let h = Hierarchy::build(&p, &o, &c).unwrap();
+            let vertices = h.vertex_count();
+            let picks: [&dyn Fn(usize) -> bool; 4] =
+                [&|_| false, &|v| v == vertices / 2, &|v| v % 7 == 3, &|_| {
+                    true
+                }];
+            for pick in picks {
+                let moved: Vec<bool> = (0..vertices).map(pick).collect();
+                let marked = h.nodes_moved(&moved);
+                assert_eq!(marked.len(), h.root() as usize + 1);
+                for node in 0..=h.root() {
+                    let mut below = Vec::new();
+                    collect_leaves(&h, node, &mut below);
+                    let expected = below
+                        .iter()
+                        .any(|&f| h.topology.face(f).iter().any(|&v| moved[v as usize]));
+                    assert_eq!(
+                        marked[node as usize], expected,
+                        "node {node} of {n}² × {copies}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn grid_hierarchy_is_balanced() {
         let (p, o, c) = grid(32, 1);

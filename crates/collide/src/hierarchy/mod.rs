@@ -302,6 +302,33 @@ impl Hierarchy {
         }
     }
 
+    /// Per node (faces, then records, as [`Self::node_id`] numbers them), whether a vertex
+    /// below it is one that `moved` flags: the faces around each moved vertex and the records
+    /// above them, climbing until a record already marked, so the cost follows what moved.
+    ///
+    /// # Panics
+    /// If `moved` has fewer entries than the mesh has vertices.
+    pub(crate) fn nodes_moved(&self, moved: &[bool]) -> Vec<bool> {
+        let faces = self.face_count();
+        let mut marked = vec![false; faces + self.children.len()];
+        let around = self.vertex_faces();
+        for v in (0..self.vertex_count()).filter(|&v| moved[v]) {
+            for &f in around.of(v) {
+                if std::mem::replace(&mut marked[f as usize], true) {
+                    continue;
+                }
+                let mut node = LEAF | f;
+                while !self.children.is_empty()
+                    && let Some(record) = self.boxes.parent(node)
+                    && !std::mem::replace(&mut marked[faces + record as usize], true)
+                {
+                    node = record;
+                }
+            }
+        }
+        marked
+    }
+
     /// The place of face `f` in the depth-first order, where the faces below any node are
     /// contiguous.
     pub(crate) fn leaf_position(&self, f: u32) -> u32 {
