@@ -61,6 +61,12 @@ pub(crate) struct Surface {
     /// What the body's hierarchy answered for each refined point at its last measure: its
     /// closest point within the thickness.
     closest: Vec<Option<Closest>>,
+    /// The refined points that have one, in ascending order: the lift's rounds visit these
+    /// alone (a few thousand of a garment's tens of thousands of points rest on the body) rather
+    /// than every answer, and in the same order.
+    near: Vec<u32>,
+    /// The list `near` is rebuilt into.
+    spare: Vec<u32>,
     /// Lower bounds of the refined points' distances from the body, as of their positions and
     /// the body's at the last measure.
     bounds: DistanceBounds,
@@ -82,6 +88,8 @@ impl Surface {
         Self {
             points: Refreshed::new(&stencils),
             closest: vec![None; stencils.len()],
+            near: Vec::new(),
+            spare: Vec::new(),
             bounds: DistanceBounds::default(),
             moved: Vec::new(),
             queries: Vec::new(),
@@ -118,13 +126,13 @@ impl Surface {
             }
             let target = clear + thickness * SLACK;
             self.measure(body, clear)?;
-            let closest = &self.closest;
             self.lift.fill(Vec3::zeros());
             self.body.fill(Vec3::zeros());
             self.weight.fill(0.0);
             let mut any = false;
-            for (k, c) in closest.iter().enumerate() {
-                let Some(c) = c else { continue };
+            for &k in &self.near {
+                let k = k as usize;
+                let Some(c) = &self.closest[k] else { continue };
                 let (normal, distance) = away_from(self.points.points()[k], c);
                 if distance >= clear {
                     continue;
@@ -205,7 +213,40 @@ impl Surface {
             self.closest[k as usize] = answer.filter(|c| c.distance <= clear);
             self.bounds.set(k, answer.map_or(reach, |c| c.distance));
         }
+        self.update_near();
         Ok(())
+    }
+
+    /// Brings [`Self::near`] up to date with the answers of the points just measured
+    /// ([`Self::moved`]; both lists ascend): a merge of the two, keeping the points that have
+    /// an answer.
+    fn update_near(&mut self) {
+        let (near, moved, closest) = (&self.near, &self.moved, &self.closest);
+        debug_assert!(moved.is_sorted());
+        self.spare.clear();
+        let (mut i, mut j) = (0, 0);
+        loop {
+            let k = match (near.get(i), moved.get(j)) {
+                (Some(&a), Some(&b)) if a <= b => {
+                    i += 1;
+                    j += usize::from(a == b);
+                    a
+                }
+                (_, Some(&b)) => {
+                    j += 1;
+                    b
+                }
+                (Some(&a), None) => {
+                    i += 1;
+                    a
+                }
+                (None, None) => break,
+            };
+            if closest[k as usize].is_some() {
+                self.spare.push(k);
+            }
+        }
+        std::mem::swap(&mut self.near, &mut self.spare);
     }
 
     /// Whether the surface must clear itself.
@@ -278,6 +319,45 @@ mod tests {
                 c >= 0.005 * (1.0 - 1e-9),
                 "refined point {k} at {p} is {c} m off"
             );
+        }
+    }
+
+    /// The points the lift's rounds visit are exactly those with an answer, in order, as the
+    /// answers come and go between measures.
+    #[test]
+    fn the_points_with_an_answer_are_listed_in_order() {
+        let answered = |s: &Surface| -> Vec<u32> {
+            (0..s.closest.len() as u32)
+                .filter(|&k| s.closest[k as usize].is_some())
+                .collect()
+        };
+        // The box's top 3 mm under the sheet: every refined point within 5 mm.
+        let (mut surface, x, body) = sheet_and_box(-0.003);
+        surface.points.update(&surface.stencils, &x);
+        surface.measure(&body, 0.005).unwrap();
+        let all = answered(&surface);
+        assert_eq!(all.len(), surface.closest.len());
+        assert_eq!(surface.near, all);
+        // The first two rows of control points raised 1 mm (still within reach), then 10 cm
+        // (out of it), then put back.
+        let raised = |by: f64| -> Vec<Point> {
+            let mut y = x.clone();
+            for p in y.iter_mut().take(10) {
+                p.y += by;
+            }
+            y
+        };
+        for (control, count) in [(raised(0.001), all.len()), (raised(0.1), 0), (x, all.len())] {
+            surface.points.update(&surface.stencils, &control);
+            surface.measure(&body, 0.005).unwrap();
+            let now = answered(&surface);
+            assert!(!now.is_empty());
+            if count > 0 {
+                assert_eq!(now.len(), count);
+            } else {
+                assert!(now.len() < all.len());
+            }
+            assert_eq!(surface.near, now);
         }
     }
 
