@@ -165,6 +165,19 @@ mod tests {
     use super::*;
     use crate::Point;
 
+    /// A mesh of one face, which no record of the hierarchy holds (the face is the root): the
+    /// table is made, and a self-proximity query with it finds nothing, the face being each
+    /// corner's own.
+    #[test]
+    fn a_single_face_makes_a_table() {
+        let (p, o, c) = crate::hierarchy::grid(1, 1);
+        let mut h = Hierarchy::build(&p, &o, &c).unwrap();
+        let local = h.local_faces(0.5).unwrap();
+        h.refit(&p, 0.0).unwrap();
+        let near = h.self_proximity(0.5, &local).unwrap();
+        assert!((0..4).all(|v| near.of(v).is_empty()));
+    }
+
     #[test]
     fn a_hierarchy_in_another_order_reads_the_lists_alone_and_finds_the_same() {
         // A 24 × 24 grid of quads on the unit square, its right half then laid back over the

@@ -376,10 +376,12 @@ impl Boxes {
     }
 
     /// Where the parent's record holds the node `node` refers to (`LEAF | face`, or a record):
-    /// `record << 1 | side`; `None` for the root.
+    /// `record << 1 | side`; `None` for the root (the only face of a one-face mesh, which no
+    /// record holds, or the last record).
     fn slot(&self, node: u32) -> Option<u32> {
         if node & LEAF != 0 {
-            Some(self.leaf_slot[(node & !LEAF) as usize])
+            let slot = self.leaf_slot[(node & !LEAF) as usize];
+            (slot != NONE).then_some(slot)
         } else {
             let parent = self.records[node as usize].parent;
             (parent != NONE)

@@ -318,8 +318,7 @@ impl Hierarchy {
                     continue;
                 }
                 let mut node = LEAF | f;
-                while !self.children.is_empty()
-                    && let Some(record) = self.boxes.parent(node)
+                while let Some(record) = self.boxes.parent(node)
                     && !std::mem::replace(&mut marked[faces + record as usize], true)
                 {
                     node = record;
