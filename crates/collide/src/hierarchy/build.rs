@@ -288,12 +288,14 @@ mod tests {
             let (p, o, c) = grid(n, copies);
             let h = Hierarchy::build(&p, &o, &c).unwrap();
             let vertices = h.vertex_count();
-            let picks: [&dyn Fn(usize) -> bool; 4] =
-                [&|_| false, &|v| v == vertices / 2, &|v| v % 7 == 3, &|_| {
-                    true
-                }];
+            let picks: [fn(usize, usize) -> bool; 4] = [
+                |_, _| false,
+                |v, n| v == n / 2,
+                |v, _| v % 7 == 3,
+                |_, _| true,
+            ];
             for pick in picks {
-                let moved: Vec<bool> = (0..vertices).map(pick).collect();
+                let moved: Vec<bool> = (0..vertices).map(|v| pick(v, vertices)).collect();
                 let marked = h.nodes_moved(&moved);
                 assert_eq!(marked.len(), h.root() as usize + 1);
                 for node in 0..=h.root() {
