@@ -26,7 +26,7 @@
 //! pass moved a hundred times heavier, so the cloth around them takes up the strain.
 
 use tailor_subdiv::Point;
-use tailor_subdiv::csr::{Csr, group_into};
+use tailor_subdiv::csr::Csr;
 
 use crate::energy::Vec3;
 use crate::model::Springs;
@@ -40,31 +40,23 @@ pub const SWEEPS: usize = 256;
 /// corrections of its neighbours do not push it straight back out.
 const SLACK: f64 = 0.05;
 
-/// No source reaches this vertex through edges.
+/// No source reaches this vertex through edges (or the search has not reached it yet).
 const UNREACHED: u32 = u32::MAX;
+
+/// An edge the order has not placed yet.
+const UNPLACED: u32 = u32::MAX;
 
 /// The strain limiter of one garment: its edges' vertex adjacency, built once, and the
 /// per-substep order of the edges.
 #[derive(Clone, Debug)]
 pub(crate) struct StrainLimiter {
-    /// Edges at each vertex.
-    incident: Csr,
-    /// The other end of each edge of `incident`, entry for entry, for the breadth-first pass.
-    across: Vec<u32>,
-    /// Edges by breadth-first depth from the sources, then the unreached ones.
-    order: Vec<u32>,
-    /// Each edge's place in `order`.
-    place: Vec<u32>,
-    depth: Vec<u32>,
+    /// The order of the edges' visits.
+    order: EdgeOrder,
     /// The vertices `order` starts from: fixed ones, and after a collision pass the ones it
     /// moved.
     sources: Vec<bool>,
     /// The inverse masses of [`Self::limit_around`].
     weights: Vec<f64>,
-    /// The breadth-first queue of [`Self::order_from`], and the row starts of its grouping
-    /// of the edges by depth.
-    queue: Vec<u32>,
-    starts: Vec<u32>,
     /// The places in `order` of the edges a sweep visits.
     pending: Pending,
     /// The positions the last call ended with, and its limit: an edge not pending then was
@@ -77,29 +69,12 @@ pub(crate) struct StrainLimiter {
 
 impl StrainLimiter {
     pub fn new(springs: &Springs, vertex_count: usize) -> Self {
-        let ends = springs.verts.iter().enumerate();
-        let incident = Csr::group_by(
-            vertex_count,
-            ends.flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
-        );
-        let across = (0..vertex_count)
-            .flat_map(|v| {
-                incident.row(v).iter().map(move |&e| {
-                    let [a, b] = springs.verts[e as usize];
-                    if a as usize == v { b } else { a }
-                })
-            })
-            .collect();
+        let mut order = EdgeOrder::new(springs, vertex_count);
+        order.restart(|_| false);
         Self {
-            incident,
-            across,
-            order: (0..springs.verts.len() as u32).collect(),
-            place: (0..springs.verts.len() as u32).collect(),
-            depth: vec![UNREACHED; vertex_count],
+            order,
             sources: vec![false; vertex_count],
             weights: Vec::with_capacity(vertex_count),
-            queue: Vec::with_capacity(vertex_count),
-            starts: Vec::with_capacity(vertex_count + 3),
             pending: Pending::default(),
             settled: Vec::new(),
             settled_limit: 0.0,
@@ -108,49 +83,8 @@ impl StrainLimiter {
     }
 
     /// Whether the edges are ordered from other vertices than those `source` flags.
-    fn sources_changed(&self, springs: &Springs, source: impl Fn(usize) -> bool) -> bool {
-        let same = (0..self.depth.len()).all(|v| self.sources[v] == source(v));
-        !same || self.order.len() != springs.verts.len()
-    }
-
-    /// Orders the edges outwards from the vertices `source` flags (breadth first, a fixed
-    /// order).
-    fn order_from(&mut self, springs: &Springs, source: impl Fn(usize) -> bool) {
-        let n = self.depth.len();
-        for (v, f) in self.sources.iter_mut().enumerate() {
-            *f = source(v);
-        }
-        self.depth.fill(UNREACHED);
-        let queue = &mut self.queue;
-        queue.clear();
-        queue.extend((0..n as u32).filter(|&v| self.sources[v as usize]));
-        for &v in queue.iter() {
-            self.depth[v as usize] = 0;
-        }
-        let mut head = 0;
-        while head < queue.len() {
-            let v = queue[head] as usize;
-            head += 1;
-            let next = self.depth[v] + 1;
-            for &other in &self.across[self.incident.range(v)] {
-                let d = &mut self.depth[other as usize];
-                if *d == UNREACHED {
-                    *d = next;
-                    queue.push(other);
-                }
-            }
-        }
-        // Edges by the depth of their nearer end, stably (the unreached last, at depth n).
-        let depth = &self.depth;
-        let by_depth = springs.verts.iter().enumerate().map(|(e, &[a, b])| {
-            let d = depth[a as usize].min(depth[b as usize]);
-            (if d == UNREACHED { n as u32 } else { d }, e as u32)
-        });
-        group_into(n + 1, by_depth, &mut self.starts, &mut self.order);
-        self.place.resize(self.order.len(), 0);
-        for (k, &e) in self.order.iter().enumerate() {
-            self.place[e as usize] = k as u32;
-        }
+    fn sources_changed(&self, source: impl Fn(usize) -> bool) -> bool {
+        !(0..self.sources.len()).all(|v| self.sources[v] == source(v))
     }
 
     /// Brings every edge of `springs` within `limit` (a fraction, e.g. 0.1) of its rest
@@ -184,8 +118,9 @@ impl StrainLimiter {
     /// carried over by edge, not visited all again). The corrections, their order and so the
     /// bytes are those of visiting every edge; most sweeps touch a few hundred edges of
     /// thousands. On the 64² drape at one substep the limiter runs about 400 times, most of
-    /// them after a collision pass, and ordering the edges (a breadth-first pass over the
-    /// mesh, about 0.1 ms) is now most of what it spends.
+    /// them after a collision pass, so the order is made only as far as the sweeps reach
+    /// ([`EdgeOrder`]): made whole, a breadth-first pass over the mesh of about 0.1 ms, it
+    /// was most of what the limiter spent.
     fn sweep(
         &mut self,
         springs: &Springs,
@@ -204,37 +139,40 @@ impl StrainLimiter {
         let h = *h;
         let comparable = self.settled.len() == x.len() && self.settled_limit == limit;
         let source = |v: usize| inverse_mass[v] == 0.0 || moved.is_some_and(|moved| moved[v]);
-        let reordered = self.sources_changed(springs, source);
+        let reordered = self.sources_changed(source);
         // The edges still pending from the last call, by edge: the new order moves their places.
         let mut carried = std::mem::take(&mut self.carried);
         carried.clear();
         if reordered {
             if comparable {
-                carried.extend(self.pending.places().map(|k| self.order[k]));
+                carried.extend(self.pending.places().map(|k| self.order.edge(k)));
             }
-            self.order_from(springs, source);
+            for (v, f) in self.sources.iter_mut().enumerate() {
+                *f = source(v);
+            }
+            self.order.restart(source);
         }
         let Self {
-            incident,
             order,
-            place,
-            depth,
             pending,
             settled,
             settled_limit,
             ..
         } = self;
-        let edges = order.len();
+        let edges = springs.verts.len();
         if !comparable {
+            order.finish();
             pending.fill(edges);
         } else {
             if reordered {
                 pending.clear(edges);
-                pending.insert_all(&carried, place);
+                for &e in &carried {
+                    pending.insert(order.place(e));
+                }
             }
             for (v, (now, then)) in x.iter().zip(settled.iter()).enumerate() {
                 if now != then {
-                    pending.insert_all(incident.row(v), place);
+                    order.insert_around(v, pending);
                 }
             }
         }
@@ -265,13 +203,14 @@ impl StrainLimiter {
                 } else {
                     k.checked_sub(1)
                 };
-                let e = order[k] as usize;
+                let e = order.edge(k) as usize;
                 let ([a, b], rest) = (springs.verts[e], springs.rest[e]);
                 let (a, b) = (a as usize, b as usize);
                 let (mut wa, mut wb) = (inverse_mass[a], inverse_mass[b]);
-                if sweep == 0 && depth[a] != depth[b] {
+                let (depth_a, depth_b) = (order.depth[a], order.depth[b]);
+                if sweep == 0 && depth_a != depth_b {
                     // Shock propagation: the end nearer the sources holds.
-                    if depth[a] < depth[b] {
+                    if depth_a < depth_b {
                         wa = 0.0;
                     } else {
                         wb = 0.0;
@@ -321,7 +260,7 @@ impl StrainLimiter {
                 // the limit.
                 for (end, delta) in [(a, da), (b, db)] {
                     if delta != Vec3::zeros() {
-                        pending.insert_all(incident.row(end), place);
+                        order.insert_around(end, pending);
                     }
                 }
                 changed = true;
@@ -369,6 +308,167 @@ impl StrainLimiter {
     }
 }
 
+/// The order of the sweeps' visits: the edges by the breadth-first depth of their nearer
+/// end from the source vertices, those of one depth by index, the edges no source reaches
+/// last (by index).
+///
+/// Made as far as the sweeps need it: a depth's edges get their places when a sweep first
+/// asks for one of them (or of a deeper edge), the search expanding one depth at a time.
+/// After a collision pass the sources are the few vertices it moved and the sweeps rarely
+/// reach beyond a few rings of edges around them, where a whole order would search the whole
+/// mesh at each of the hundreds of calls a run makes. The places given are those of the
+/// whole order, since every edge of a depth is placed before any deeper one; a vertex the
+/// search has not reached yet is one depth past every placed edge, which compares with an
+/// end of a placed edge as its depth would.
+#[derive(Clone, Debug)]
+struct EdgeOrder {
+    /// Edges at each vertex.
+    incident: Csr,
+    /// The other end of each edge of `incident`, entry for entry.
+    across: Vec<u32>,
+    /// Each vertex's depth, [`UNREACHED`] where the search has not reached it.
+    depth: Vec<u32>,
+    /// The search's queue: the sources, then the vertices of each depth in turn.
+    queue: Vec<u32>,
+    /// Where the vertices of the next depth to place start in `queue`; every vertex before
+    /// it has been expanded, so `queue` holds every vertex of that depth after it.
+    next: usize,
+    /// The depth whose edges are placed next.
+    level: u32,
+    /// The placed edges in order.
+    order: Vec<u32>,
+    /// Each edge's place, [`UNPLACED`] until it has one.
+    place: Vec<u32>,
+    /// Every edge is placed.
+    complete: bool,
+    /// The edges of one depth, while they are placed.
+    scratch: Vec<u32>,
+}
+
+impl EdgeOrder {
+    fn new(springs: &Springs, vertex_count: usize) -> Self {
+        let ends = springs.verts.iter().enumerate();
+        let incident = Csr::group_by(
+            vertex_count,
+            ends.flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
+        );
+        let across = (0..vertex_count)
+            .flat_map(|v| {
+                incident.row(v).iter().map(move |&e| {
+                    let [a, b] = springs.verts[e as usize];
+                    if a as usize == v { b } else { a }
+                })
+            })
+            .collect();
+        Self {
+            incident,
+            across,
+            depth: vec![UNREACHED; vertex_count],
+            queue: Vec::with_capacity(vertex_count),
+            next: 0,
+            level: 0,
+            order: Vec::with_capacity(springs.verts.len()),
+            place: vec![UNPLACED; springs.verts.len()],
+            complete: false,
+            scratch: Vec::new(),
+        }
+    }
+
+    /// Starts the order again from the vertices `source` flags; nothing is placed.
+    fn restart(&mut self, source: impl Fn(usize) -> bool) {
+        self.depth.fill(UNREACHED);
+        self.queue.clear();
+        for v in 0..self.depth.len() {
+            if source(v) {
+                self.depth[v] = 0;
+                self.queue.push(v as u32);
+            }
+        }
+        self.next = 0;
+        self.level = 0;
+        self.order.clear();
+        self.place.fill(UNPLACED);
+        self.complete = false;
+    }
+
+    /// The edge at place `k` (placed).
+    fn edge(&self, k: usize) -> u32 {
+        self.order[k]
+    }
+
+    /// Edge `e`'s place, placing as many depths as it takes.
+    fn place(&mut self, e: u32) -> usize {
+        while self.place[e as usize] == UNPLACED {
+            self.place_next();
+        }
+        self.place[e as usize] as usize
+    }
+
+    /// Adds the places of the edges at vertex `v` to `pending`.
+    fn insert_around(&mut self, v: usize, pending: &mut Pending) {
+        for i in self.incident.range(v) {
+            let e = self.incident.items[i];
+            pending.insert(self.place(e));
+        }
+    }
+
+    /// Places every edge.
+    fn finish(&mut self) {
+        while !self.complete {
+            self.place_next();
+        }
+    }
+
+    /// Places the edges of the next depth (those with an end there and none nearer), by
+    /// index, and queues the vertices one deeper; when no vertex is that deep, the edges no
+    /// source reaches, by index.
+    fn place_next(&mut self) {
+        debug_assert!(!self.complete, "every edge is placed");
+        let (start, end) = (self.next, self.queue.len());
+        if start == end {
+            for (e, place) in self.place.iter_mut().enumerate() {
+                if *place == UNPLACED {
+                    *place = self.order.len() as u32;
+                    self.order.push(e as u32);
+                }
+            }
+            self.complete = true;
+            return;
+        }
+        let level = self.level;
+        self.scratch.clear();
+        for &v in &self.queue[start..end] {
+            let range = self.incident.range(v as usize);
+            let (edges, others) = (&self.incident.items[range.clone()], &self.across[range]);
+            for (&e, &other) in edges.iter().zip(others) {
+                // UNREACHED is deeper than any depth: an end not reached yet is one deeper.
+                if self.depth[other as usize] >= level {
+                    self.scratch.push(e);
+                }
+            }
+        }
+        // An edge with both ends at this depth was found from each.
+        self.scratch.sort_unstable();
+        self.scratch.dedup();
+        for &e in &self.scratch {
+            self.place[e as usize] = self.order.len() as u32;
+            self.order.push(e);
+        }
+        for k in start..end {
+            let v = self.queue[k] as usize;
+            for &other in &self.across[self.incident.range(v)] {
+                let d = &mut self.depth[other as usize];
+                if *d == UNREACHED {
+                    *d = level + 1;
+                    self.queue.push(other);
+                }
+            }
+        }
+        self.next = end;
+        self.level = level + 1;
+    }
+}
+
 /// A set of places `0..n` in the edge order, as bits, walked forwards or backwards while it
 /// changes.
 #[derive(Clone, Debug, Default)]
@@ -407,12 +507,8 @@ impl Pending {
         }
     }
 
-    /// Adds the places of the edges `edges` (`place` maps an edge to its place).
-    fn insert_all(&mut self, edges: &[u32], place: &[u32]) {
-        for &e in edges {
-            let k = place[e as usize] as usize;
-            self.words[k / 64] |= 1 << (k % 64);
-        }
+    fn insert(&mut self, k: usize) {
+        self.words[k / 64] |= 1 << (k % 64);
     }
 
     fn remove(&mut self, k: usize) {
@@ -605,6 +701,84 @@ mod tests {
             );
             assert_eq!(kept_x, fresh_x, "call {call}: positions");
             assert_eq!(kept_v, fresh_v, "call {call}: velocities");
+        }
+    }
+
+    /// The whole order by its definition: depths by a breadth-first search from the sources,
+    /// the edges sorted by the depth of their nearer end (the unreached last), then by index.
+    fn whole_order(springs: &Springs, n: usize, sources: &[usize]) -> (Vec<u32>, Vec<usize>) {
+        let mut depth = vec![UNREACHED; n];
+        let mut queue: std::collections::VecDeque<usize> = sources.iter().copied().collect();
+        for &v in sources {
+            depth[v] = 0;
+        }
+        while let Some(v) = queue.pop_front() {
+            for &[a, b] in &springs.verts {
+                let (a, b) = (a as usize, b as usize);
+                for (from, to) in [(a, b), (b, a)] {
+                    if from == v && depth[to] == UNREACHED {
+                        depth[to] = depth[v] + 1;
+                        queue.push_back(to);
+                    }
+                }
+            }
+        }
+        let mut edges: Vec<usize> = (0..springs.verts.len()).collect();
+        edges.sort_by_key(|&e| {
+            let [a, b] = springs.verts[e];
+            (depth[a as usize].min(depth[b as usize]), e)
+        });
+        let mut place = vec![0; edges.len()];
+        for (k, &e) in edges.iter().enumerate() {
+            place[e] = k;
+        }
+        (depth, place)
+    }
+
+    #[test]
+    fn edges_are_placed_where_the_whole_order_puts_them() {
+        // The jumbled grid and a separate edge no source on the grid reaches.
+        let (mut springs, _) = jumbled_grid();
+        springs.verts.push([100, 101]);
+        springs.rest.push(1.0);
+        let n = 102;
+        let edges = springs.verts.len();
+        let mut order = EdgeOrder::new(&springs, n);
+        for sources in [
+            vec![],
+            vec![0],
+            vec![45],
+            vec![12, 13, 47, 90],
+            vec![100],
+            vec![7, 101],
+        ] {
+            let (depth, whole) = whole_order(&springs, n, &sources);
+            // Asked in a scrambled order, from near the sources outwards and back.
+            order.restart(|v| sources.contains(&v));
+            let asked = (0..edges).map(|i| (i * 97 + 31) % edges);
+            for e in asked.clone().take(edges / 3) {
+                assert_eq!(
+                    order.place(e as u32),
+                    whole[e],
+                    "sources {sources:?}, edge {e}"
+                );
+                assert_eq!(order.edge(whole[e]), e as u32);
+                // The ends of a placed edge compare as their depths do.
+                let [a, b] = springs.verts[e].map(|v| v as usize);
+                assert_eq!(
+                    order.depth[a].cmp(&order.depth[b]),
+                    depth[a].cmp(&depth[b]),
+                    "sources {sources:?}, edge {e}"
+                );
+            }
+            order.finish();
+            for e in asked {
+                assert_eq!(
+                    order.place(e as u32),
+                    whole[e],
+                    "sources {sources:?}, edge {e}"
+                );
+            }
         }
     }
 
