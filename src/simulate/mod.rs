@@ -200,10 +200,19 @@ fn simulate(args: &Args) -> Result<Outcome> {
     let last = range.end.unwrap_or(scene.frames);
     let dir = args.out.clone().unwrap_or_else(|| scene.output.dir.clone());
     let out = &scene.output;
-    // The written cloth surface, the simulator and the refined body do not need each other
-    // to be made: they are made at once.
-    let (cloth, (simulator, body)) = rayon::join(
-        || Surface::new(&scene.cloth.doc.mesh, out.level, out.limit_normals),
+    // The written cloth surface (and the control mesh as written beside it), the simulator
+    // and the refined body do not need each other to be made: they are made at once.
+    let ((cloth, control), (simulator, body)) = rayon::join(
+        || {
+            rayon::join(
+                || Surface::new(&scene.cloth.doc.mesh, out.level, out.limit_normals),
+                || {
+                    (out.control_mesh && out.level > 0)
+                        .then(|| Surface::new(&scene.cloth.doc.mesh, 0, false))
+                        .transpose()
+                },
+            )
+        },
         || {
             rayon::join(
                 || Shot::simulator(&scene),
@@ -215,7 +224,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
             )
         },
     );
-    let (cloth, simulator, body) = (cloth?, simulator?, body?);
+    let (cloth, control_surface, simulator, body) = (cloth?, control?, simulator?, body?);
     let mut shot = Shot::new(&scene, simulator, &cloth, body.clone())?;
     let vertex_count = scene.cloth.doc.mesh.vertex_count();
     let resumed = if args.resume {
@@ -269,7 +278,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
         u64::from(last.saturating_sub(next) + 1),
         args.quiet || next > last,
     );
-    let mut output = Output::new(&scene, &dir, first, stats, cloth, body)?;
+    let mut output = Output::new(&scene, &dir, first, stats, cloth, control_surface, body);
     let mut simulate = |deliver: &mut dyn FnMut(Simulated) -> bool| {
         run_frames(&mut shot, &mut state, next..=last, args, &progress, deliver)
     };
@@ -493,10 +502,8 @@ impl<'a> Shot<'a> {
         // The written faces at every level, the control mesh's own at level 0: the lift moves
         // control points after the garment's self tests, and only the written surface's
         // self tests, alternating with the lift, keep what is written clear.
-        let refined = cloth.mesh();
-        let faces = Some((refined.face_offsets(), refined.face_vertices()));
         simulator
-            .set_collision_surface(cloth.stencils().clone(), faces)
+            .set_collision_surface(cloth.stencils().clone(), Some(cloth.hierarchy()))
             .with_context(|| building_cloth(scene))?;
         let body = match body {
             Some(surface) => {
@@ -632,23 +639,21 @@ struct Output<'a> {
 }
 
 impl<'a> Output<'a> {
+    /// The output of `scene` into `dir` from frame `first` on, after the figures `stats` of
+    /// the frames before it, writing `cloth` (and `control_surface`, the control mesh as
+    /// written beside a refined surface) with the refined `body`.
     fn new(
         scene: &'a Scene,
         dir: &'a Path,
         first: u32,
         stats: Vec<FrameStats>,
         cloth: Surface,
+        control_surface: Option<Surface>,
         body: Option<Surface>,
-    ) -> Result<Self> {
-        let out = &scene.output;
-        let precision = out.precision;
+    ) -> Self {
+        let precision = scene.output.precision;
         let doc = &scene.cloth.doc;
-        let control_surface = if out.control_mesh && out.level > 0 {
-            Some(Surface::new(&doc.mesh, 0, false)?)
-        } else {
-            None
-        };
-        Ok(Self {
+        Self {
             scene,
             dir,
             first,
@@ -660,7 +665,7 @@ impl<'a> Output<'a> {
             body,
             clearances: Clearances::default(),
             stats,
-        })
+        }
     }
 
     /// Checks a simulated frame, writes its files and then its checkpoint.

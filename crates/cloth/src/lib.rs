@@ -49,8 +49,8 @@
 //! fail-safes, so no vertex tunnels through the body or ends closer than half the thickness.
 //! Given the stencils of the subdivided surface ([`Simulator::set_collision_surface`]), the
 //! simulator also keeps every point of that surface, the one that renders, a full thickness
-//! from the body, and given its faces too, with self-collision on, keeps it from passing
-//! through itself. After each solve, strain limiting (Provot 1995) keeps every edge within
+//! from the body, and given its faces too (as their collision hierarchy), with
+//! self-collision on, keeps it from passing through itself. After each solve, strain limiting (Provot 1995) keeps every edge within
 //! [`Settings::strain_limit`] of its rest length.
 #![warn(missing_docs)]
 

@@ -361,6 +361,38 @@ fn a_box_swept_through_the_sheet_in_one_frame_does_not_tunnel() {
     assert!(middle.y > high.y + rise.y, "middle at {middle}");
 }
 
+#[test]
+fn a_collision_surface_over_other_points_is_refused() {
+    // Stencils over another garment's control points, and a hierarchy over another level's
+    // refined points, are refused; the surface's own are taken.
+    let garment = centred_sheet(5, 1.0);
+    let settings = Settings {
+        self_collision: true,
+        ..Settings::default()
+    };
+    let (mut sim, _) = simulator(&garment, &Material::COTTON, settings);
+    let refined_at = |level: u32| {
+        let refiner = Refiner::new(&garment, level as usize);
+        let stencils = refiner.stencils();
+        let mut points = vec![Point::origin(); stencils.len()];
+        stencils.apply(garment.positions(), &mut points);
+        (stencils, refiner.refined_mesh(points, None))
+    };
+    let (stencils, refined) = refined_at(1);
+    let (_, deeper) = refined_at(2);
+    let other_garment = Refiner::new(&centred_sheet(4, 1.0), 1).stencils();
+    let wrong = |result: Result<(), tailor_cloth::ClothError>| {
+        matches!(result, Err(tailor_cloth::ClothError::WrongLength { .. }))
+    };
+    assert!(wrong(sim.set_collision_surface(other_garment, None)));
+    assert!(wrong(sim.set_collision_surface(
+        stencils.clone(),
+        Some(&hierarchy(&deeper))
+    )));
+    sim.set_collision_surface(stencils, Some(&hierarchy(&refined)))
+        .unwrap();
+}
+
 /// The closest distance of the sheet's level-2 Catmull-Clark surface to the ball after a
 /// 13² drape of `frames` frames, with or without the simulator told about that surface.
 fn drape_surface_clearance(frames: u32, with_surface: bool) -> (f64, f64) {

@@ -109,16 +109,16 @@ impl Collisions {
     }
 
     /// Makes the refined surface `stencils` evaluates the one that must clear the obstacle,
-    /// and with `faces` (its CSR face offsets and vertices) itself too ([`surface_layers`]),
-    /// its hierarchy built at the garment's `rest` positions.
+    /// and with `faces` (its hierarchy) itself too ([`surface_layers`]), refit at the
+    /// garment's `rest` positions.
     pub fn set_surface(
         &mut self,
         stencils: StencilTable,
-        faces: Option<(&[u32], &[u32])>,
+        faces: Option<&Hierarchy>,
         rest: &[Point],
     ) -> Result<(), CollideError> {
         let layers = faces
-            .map(|(offsets, vertices)| SurfaceLayers::new(&stencils, rest, offsets, vertices))
+            .map(|faces| SurfaceLayers::new(&stencils, rest, faces.clone()))
             .transpose()?;
         self.surface = Some(Surface::new(stencils, layers));
         Ok(())

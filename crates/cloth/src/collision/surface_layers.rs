@@ -49,17 +49,16 @@ pub(super) struct SurfaceLayers {
 }
 
 impl SurfaceLayers {
-    /// The refined faces `face_offsets`/`face_vertices` over the points `stencils` gives, with
-    /// the hierarchy built at the refined `rest` positions.
+    /// The refined faces of `hierarchy` over the points `stencils` gives, the hierarchy refit
+    /// at the refined `rest` positions.
     pub fn new(
         stencils: &StencilTable,
         rest: &[Point],
-        face_offsets: &[u32],
-        face_vertices: &[u32],
+        mut hierarchy: Hierarchy,
     ) -> Result<Self, CollideError> {
         let mut start = vec![Point::origin(); stencils.len()];
         stencils.apply(rest, &mut start);
-        let hierarchy = Hierarchy::build(&start, face_offsets, face_vertices)?;
+        hierarchy.refit(&start, 0.0)?;
         Ok(Self {
             hierarchy,
             end: Refreshed::new(stencils),
