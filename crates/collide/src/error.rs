@@ -70,6 +70,9 @@ pub enum CollideError {
         /// How many positions were given.
         given: usize,
     },
+    /// A partial swept refit was asked of a hierarchy whose last refit was not swept.
+    #[error("the ends of a swept refit were moved, but the last refit was not swept")]
+    NotSwept,
     /// Inside/outside was asked of a mesh that does not enclose a volume.
     #[error("the mesh is not closed: {open_edges} edges do not have exactly two triangles")]
     NotClosed {

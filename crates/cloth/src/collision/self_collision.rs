@@ -107,13 +107,19 @@ impl Buffers {
 /// ([`Hierarchy::self_impacts_again`], the same lists as asking of the whole mesh): the rounds
 /// of impulses and impact zones after the first query move a few vertices each. On the 128²
 /// drape a substep took eleven rounds of a few impacts each, every one a query of the whole
-/// mesh.
+/// mesh. When no other pass has refit the mesh since (its [`Hierarchy::refit_count`]), the
+/// vertices found moved are the only ends its refit takes ([`Hierarchy::refit_swept_ends`]),
+/// rather than the refit comparing every start and end once more.
 #[derive(Clone, Debug, Default)]
 pub(super) struct SelfImpacts {
     pub impacts: Impacts,
     start: Vec<Point>,
     end: Vec<Point>,
     moved: Vec<bool>,
+    /// The vertices `moved` flags, in order.
+    listed: Vec<u32>,
+    /// The mesh's refit count after this query's own refit.
+    fit: Option<u64>,
 }
 
 impl SelfImpacts {
@@ -124,24 +130,41 @@ impl SelfImpacts {
         x0: &[Point],
         x: &[Point],
     ) -> Result<bool, CollideError> {
-        mesh.refit_swept(x0, x, 0.0)?;
         let answered = self.start.len() == x0.len()
             && self.end.len() == x.len()
             && self.start.iter().zip(x0).all(|(p, q)| same_bits(p, q));
         if answered {
             self.moved.clear();
-            self.moved
-                .extend(x.iter().zip(&self.end).map(|(p, q)| !same_bits(p, q)));
-            if self.moved.contains(&true) {
+            self.listed.clear();
+            for (v, (p, q)) in x.iter().zip(&self.end).enumerate() {
+                let moved = !same_bits(p, q);
+                self.moved.push(moved);
+                if moved {
+                    self.listed.push(v as u32);
+                }
+            }
+            if self.fit == Some(mesh.refit_count()) {
+                if !self.listed.is_empty() {
+                    mesh.refit_swept_ends(x, &self.listed)?;
+                }
+            } else {
+                mesh.refit_swept(x0, x, 0.0)?;
+            }
+            if !self.listed.is_empty() {
                 mesh.self_impacts_again(&self.moved, &mut self.impacts);
+                for &v in &self.listed {
+                    self.end[v as usize] = x[v as usize];
+                }
             }
         } else {
+            mesh.refit_swept(x0, x, 0.0)?;
             mesh.self_impacts_into(&mut self.impacts);
             self.start.clear();
             self.start.extend_from_slice(x0);
+            self.end.clear();
+            self.end.extend_from_slice(x);
         }
-        self.end.clear();
-        self.end.extend_from_slice(x);
+        self.fit = Some(mesh.refit_count());
         Ok(!(self.impacts.vertex_triangle.is_empty() && self.impacts.edge_edge.is_empty()))
     }
 }
@@ -427,5 +450,85 @@ impl Zones {
             }
         }
         m.sync_positions();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two 4 × 4 sheets of unit quads, the second 1 above the first, as one mesh.
+    fn two_sheets() -> (Vec<Point>, Vec<u32>, Vec<u32>) {
+        let (mut positions, mut offsets, mut corners) = (Vec::new(), vec![0], Vec::new());
+        for layer in 0..2u32 {
+            let base = positions.len() as u32;
+            for j in 0..5 {
+                for i in 0..5 {
+                    let wobble = 0.01 * f64::from((i * 7 + j * 3) % 5);
+                    positions.push(Point::new(
+                        f64::from(i),
+                        f64::from(j),
+                        f64::from(layer) + wobble,
+                    ));
+                }
+            }
+            for j in 0..4 {
+                for i in 0..4 {
+                    let v = base + j * 5 + i;
+                    corners.extend([v, v + 1, v + 6, v + 5]);
+                    offsets.push(corners.len() as u32);
+                }
+            }
+        }
+        (positions, offsets, corners)
+    }
+
+    /// Queries asked again, after the mesh was refit by others in between (statically, or
+    /// swept to other ends) or not, answer as a query of a new mesh does.
+    #[test]
+    fn queries_asked_again_answer_as_a_new_query_whoever_refit_the_mesh() {
+        let (x0, offsets, corners) = two_sheets();
+        let mut mesh = Hierarchy::build(&x0, &offsets, &corners).unwrap();
+        let mut kept = SelfImpacts::default();
+        let fresh = |x: &[Point]| {
+            let mut mesh = Hierarchy::build(&x0, &offsets, &corners).unwrap();
+            let mut query = SelfImpacts::default();
+            query.query(&mut mesh, &x0, x).unwrap();
+            query.impacts
+        };
+        let moved = |x: &[Point], vertices: &[usize], dz: f64| {
+            let mut x = x.to_vec();
+            for &v in vertices {
+                x[v].z += dz;
+            }
+            x
+        };
+        // The upper sheet falls through the lower one.
+        let upper: Vec<usize> = (25..50).collect();
+        let x1 = moved(&x0, &upper, -2.0);
+        assert!(kept.query(&mut mesh, &x0, &x1).unwrap());
+        assert!(kept.impacts == fresh(&x1), "the answers at x1");
+        // A few of its vertices stay above.
+        let x2 = moved(&x1, &[31, 32, 37], 2.0);
+        kept.query(&mut mesh, &x0, &x2).unwrap();
+        assert!(kept.impacts == fresh(&x2), "the answers at x2");
+        // Another pass refits the mesh at the start, then one more vertex stays.
+        mesh.refit(&x0, 0.0).unwrap();
+        let x3 = moved(&x2, &[38], 2.0);
+        kept.query(&mut mesh, &x0, &x3).unwrap();
+        assert!(kept.impacts == fresh(&x3), "the answers at x3");
+        // Another pass refits it swept to other ends; the same ends asked again, then one
+        // vertex more.
+        mesh.refit_swept(&x0, &x0, 0.0).unwrap();
+        kept.query(&mut mesh, &x0, &x3).unwrap();
+        assert!(kept.impacts == fresh(&x3), "the answers at x3");
+        let x4 = moved(&x3, &[43], 2.0);
+        kept.query(&mut mesh, &x0, &x4).unwrap();
+        assert!(kept.impacts == fresh(&x4), "the answers at x4");
+        assert_ne!(
+            fresh(&x4),
+            fresh(&x3),
+            "the last vertex's move changes the answers"
+        );
     }
 }

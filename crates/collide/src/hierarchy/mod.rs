@@ -67,6 +67,8 @@ pub struct Hierarchy {
     end: Vec<DVec3>,
     /// The margin of the last refit when it was swept.
     swept_margin: Option<f64>,
+    /// How many refits this value has had (see [`Hierarchy::refit_count`]).
+    refits: u64,
 }
 
 impl Hierarchy {
@@ -104,6 +106,7 @@ impl Hierarchy {
             start,
             end: Vec::new(),
             swept_margin: None,
+            refits: 0,
         };
         hierarchy.leaf_counts = hierarchy.fold_up(|_| 1, |a, b| a + b);
         hierarchy.order_leaves();
@@ -145,6 +148,14 @@ impl Hierarchy {
     #[must_use]
     pub fn triangle_count(&self) -> usize {
         self.topology.triangles.len()
+    }
+
+    /// How many refits of any kind this value has had. A caller that refit it and finds the
+    /// count unchanged later knows the boxes and positions are still those of its own refit,
+    /// without comparing them (see [`Hierarchy::refit_swept_ends`]).
+    #[must_use]
+    pub fn refit_count(&self) -> u64 {
+        self.refits
     }
 
     /// Number of vertices the mesh was built with.

@@ -14,7 +14,11 @@
 //! the same step: a swept refit from the same starts and margin as the last one recomputes
 //! only the boxes that the vertices whose ends changed enter, the same bits as refitting
 //! every box. On the 64² drape the queries asked again moved 74 of 4096 control points, and
-//! a fifth of the refined surface's swept refits moved nothing.
+//! a fifth of the refined surface's swept refits moved nothing. A caller that knows which
+//! ends moved, and that nothing refit the hierarchy since its own refit (the refit count is
+//! unchanged), names them ([`Hierarchy::refit_swept_ends`]) and spares the comparison of
+//! every start and end, four passes over the positions on the path of every query asked
+//! again.
 
 use parry3d_f64::math::Vector as DVec3;
 
@@ -43,6 +47,7 @@ impl Hierarchy {
         self.end.clear();
         self.refit_boxes(margin);
         self.swept_margin = None;
+        self.refits += 1;
         Ok(())
     }
 
@@ -72,26 +77,71 @@ impl Hierarchy {
             let moved: Vec<u32> = (0..count as u32)
                 .filter(|&v| !same_bits(&end[v as usize], &to_point(self.end[v as usize])))
                 .collect();
-            if moved.len() * PARTIAL_SHARE <= count {
-                for &v in &moved {
-                    self.end[v as usize] = to_glam(&end[v as usize]);
-                }
-                let around = self.vertex_faces();
-                let faces: Vec<u32> = moved
-                    .iter()
-                    .flat_map(|&v| around.of(v as usize))
-                    .copied()
-                    .collect();
-                let fit = fit(&self.topology, &self.start, &self.end, margin);
-                self.boxes.refit_moved(&fit, &moved, &faces);
-                return Ok(());
-            }
+            self.move_ends(end, &moved, margin);
+            return Ok(());
         }
         store(start, &mut self.start);
         store(end, &mut self.end);
         self.refit_boxes(margin);
         self.swept_margin = Some(margin);
+        self.refits += 1;
         Ok(())
+    }
+
+    /// [`Hierarchy::refit_swept`] to `end` from the last swept refit's starts and margin, for
+    /// a caller that knows which vertices' ends moved since: `moved` lists them (ascending,
+    /// each once), and every other vertex's end must be that refit's, which a caller that made
+    /// it and finds [`Hierarchy::refit_count`] unchanged since knows. The same bits as
+    /// `refit_swept` then, without comparing every vertex's start and end (a query asked again
+    /// after a round of impulses moves a few of thousands).
+    ///
+    /// # Errors
+    /// [`CollideError::NotSwept`] when the last refit was not swept; as [`Hierarchy::refit`]
+    /// for `end`'s length and the moved vertices' positions; the boxes are then left as they
+    /// were.
+    pub fn refit_swept_ends(&mut self, end: &[Point], moved: &[u32]) -> Result<(), CollideError> {
+        let Some(margin) = self.swept_margin else {
+            return Err(CollideError::NotSwept);
+        };
+        let count = self.vertex_count();
+        if end.len() != count {
+            return Err(CollideError::PositionCount {
+                expected: count,
+                given: end.len(),
+            });
+        }
+        if let Some(&vertex) = moved
+            .iter()
+            .find(|&&v| !end[v as usize].coords.iter().all(|c| c.is_finite()))
+        {
+            return Err(CollideError::NonFinitePosition {
+                vertex: vertex as usize,
+            });
+        }
+        self.move_ends(end, moved, margin);
+        Ok(())
+    }
+
+    /// The ends of the vertices `moved` lists taken from `end`, and the boxes they enter
+    /// refit, or every box when more than a quarter of the vertices moved.
+    fn move_ends(&mut self, end: &[Point], moved: &[u32], margin: f64) {
+        self.refits += 1;
+        if moved.len() * PARTIAL_SHARE > self.vertex_count() {
+            store(end, &mut self.end);
+            self.refit_boxes(margin);
+            return;
+        }
+        for &v in moved {
+            self.end[v as usize] = to_glam(&end[v as usize]);
+        }
+        let around = self.vertex_faces();
+        let faces: Vec<u32> = moved
+            .iter()
+            .flat_map(|&v| around.of(v as usize))
+            .copied()
+            .collect();
+        let fit = fit(&self.topology, &self.start, &self.end, margin);
+        self.boxes.refit_moved(&fit, moved, &faces);
     }
 
     /// Refits every box from the current positions (both ends of a swept refit), each face's
@@ -240,27 +290,35 @@ mod tests {
             .collect()
     }
 
+    /// Node by node, as bits, the boxes of `h` are those of a new hierarchy of the 12 × 12
+    /// grid refit swept from `start` to `end` with `margin`.
+    fn assert_boxes_of_a_whole_refit(h: &Hierarchy, start: &[Point], end: &[Point], margin: f64) {
+        let (_, offsets, corners) = crate::hierarchy::grid(12, 1);
+        let mut fresh = Hierarchy::build(start, &offsets, &corners).unwrap();
+        fresh.refit_swept(start, end, margin).unwrap();
+        let (got, want) = (box_bits(h), box_bits(&fresh));
+        let differs = (0..want.len()).find(|&n| got[n] != want[n]);
+        assert_eq!(differs, None, "a node's box differs from a whole refit's");
+    }
+
+    /// `end` with the vertices `moved` lists lifted by `dz` and moved sideways a third of it.
+    fn lifted(end: &[Point], moved: &[u32], dz: f64) -> Vec<Point> {
+        let mut end = end.to_vec();
+        for &v in moved {
+            end[v as usize].z += dz;
+            end[v as usize].x -= dz / 3.0;
+        }
+        end
+    }
+
     /// A swept refit after one from the same starts, with a few ends moved, leaves every box
     /// as a refit of a new hierarchy does; so does one after a static refit in between, or
     /// with another margin, and bad positions are refused on either path.
     #[test]
     fn a_swept_refit_after_a_few_ends_moved_gives_the_boxes_of_a_whole_refit() {
         let (start, offsets, corners) = crate::hierarchy::grid(12, 1);
-        // Node by node, as bits, against a new hierarchy refit from `end`.
         let whole = |h: &Hierarchy, end: &[Point], margin: f64| {
-            let mut fresh = Hierarchy::build(&start, &offsets, &corners).unwrap();
-            fresh.refit_swept(&start, end, margin).unwrap();
-            let (got, want) = (box_bits(h), box_bits(&fresh));
-            let differs = (0..want.len()).find(|&n| got[n] != want[n]);
-            assert_eq!(differs, None, "a node's box differs from a whole refit's");
-        };
-        let lifted = |end: &[Point], moved: &[usize], dz: f64| {
-            let mut end = end.to_vec();
-            for &v in moved {
-                end[v].z += dz;
-                end[v].x -= dz / 3.0;
-            }
-            end
+            assert_boxes_of_a_whole_refit(h, &start, end, margin);
         };
         let mut h = Hierarchy::build(&start, &offsets, &corners).unwrap();
         let first = lifted(&start, &[0, 7, 80, 168], 0.5);
@@ -291,5 +349,55 @@ mod tests {
         let fifth = lifted(&fourth, &[9], 1.0);
         h.refit_swept(&start, &fifth, 0.2).unwrap();
         whole(&h, &fifth, 0.2);
+    }
+
+    /// Ends moved by a caller that lists them give the boxes of a whole refit, a few or more
+    /// than a quarter of the vertices at once; each refit counts; a static last refit and a
+    /// bad moved end are refused, the boxes left as they were.
+    #[test]
+    fn ends_moved_by_list_give_the_boxes_of_a_whole_refit() {
+        let (start, offsets, corners) = crate::hierarchy::grid(12, 1);
+        let whole =
+            |h: &Hierarchy, end: &[Point]| assert_boxes_of_a_whole_refit(h, &start, end, 0.1);
+        let mut h = Hierarchy::build(&start, &offsets, &corners).unwrap();
+        assert_eq!(
+            h.refit_swept_ends(&start, &[]).unwrap_err(),
+            CollideError::NotSwept
+        );
+        h.refit_swept(&start, &start, 0.1).unwrap();
+        let count = h.refit_count();
+        let few = [3, 40, 41, 168];
+        let first = lifted(&start, &few, 0.7);
+        h.refit_swept_ends(&first, &few).unwrap();
+        whole(&h, &first);
+        assert_eq!(h.refit_count(), count + 1);
+        // More than a quarter of the 169 vertices.
+        let many: Vec<u32> = (0..169).filter(|v| v % 3 != 1).collect();
+        let second = lifted(&first, &many, -0.4);
+        h.refit_swept_ends(&second, &many).unwrap();
+        whole(&h, &second);
+        // A bad moved end, then a good one.
+        let mut bad = second.clone();
+        bad[41].x = f64::NAN;
+        assert_eq!(
+            h.refit_swept_ends(&bad, &[41]).unwrap_err(),
+            CollideError::NonFinitePosition { vertex: 41 }
+        );
+        whole(&h, &second);
+        assert_eq!(
+            h.refit_swept_ends(&second[1..], &[]).unwrap_err(),
+            CollideError::PositionCount {
+                expected: 169,
+                given: 168
+            }
+        );
+        let third = lifted(&second, &[41], 0.2);
+        h.refit_swept_ends(&third, &[41]).unwrap();
+        whole(&h, &third);
+        h.refit(&start, 0.0).unwrap();
+        assert_eq!(
+            h.refit_swept_ends(&third, &[41]).unwrap_err(),
+            CollideError::NotSwept
+        );
     }
 }
