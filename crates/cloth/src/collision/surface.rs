@@ -75,10 +75,11 @@ pub(crate) struct Surface {
     queries: Vec<Point>,
     answers: Vec<Option<Closest>>,
     /// Per control point: weighted sums of requested moves and of body velocities, and of the
-    /// weights.
+    /// weights; zero but for the control points `lifted` lists, while a round sums them.
     lift: Vec<Vec3>,
     body: Vec<Vec3>,
     weight: Vec<f64>,
+    lifted: Vec<u32>,
 }
 
 impl Surface {
@@ -99,6 +100,7 @@ impl Surface {
             lift: vec![Vec3::zeros(); n],
             body: vec![Vec3::zeros(); n],
             weight: vec![0.0; n],
+            lifted: Vec::new(),
         }
     }
 
@@ -126,9 +128,6 @@ impl Surface {
             }
             let target = clear + thickness * SLACK;
             self.measure(body, clear)?;
-            self.lift.fill(Vec3::zeros());
-            self.body.fill(Vec3::zeros());
-            self.weight.fill(0.0);
             let mut any = false;
             for &k in &self.near {
                 let k = k as usize;
@@ -152,6 +151,9 @@ impl Surface {
                 for (&j, &w) in cols.iter().zip(weights) {
                     let j = j as usize;
                     if w > 0.0 && m.inverse_mass[j] > 0.0 {
+                        if self.weight[j] == 0.0 {
+                            self.lifted.push(j as u32);
+                        }
                         self.lift[j] += request * w;
                         self.body[j] += velocity * w;
                         self.weight[j] += w;
@@ -162,17 +164,17 @@ impl Surface {
             if !any {
                 break;
             }
-            for j in 0..m.x.len() {
-                let w = self.weight[j];
-                if w == 0.0 {
-                    continue;
-                }
-                let lift = self.lift[j] / w;
+            // Each control point's move depends on its own sums alone: the order is free.
+            for j in self.lifted.drain(..) {
+                let j = j as usize;
+                let w = std::mem::take(&mut self.weight[j]);
+                let lift = std::mem::take(&mut self.lift[j]) / w;
+                let body = std::mem::take(&mut self.body[j]);
                 let Some(normal) = lift.try_normalize(0.0) else {
                     continue;
                 };
                 m.x[j] += lift;
-                m.stop_approach(j, normal, self.body[j] / w);
+                m.stop_approach(j, normal, body / w);
                 moved += 1;
             }
         }
