@@ -419,8 +419,8 @@ impl Simulator {
     /// refined points), and with self-collision on, that surface is also kept from passing
     /// through itself: the continuous self tests run on the refined points, their impulses
     /// and impact zones acting on the control points through the stencils (step 8 of the
-    /// response). A caller that writes the refined surface has built its hierarchy already;
-    /// building one for a 64² garment's level 1 took a serial 14 ms of the start of a run.
+    /// response). A caller that writes the refined surface has built that hierarchy already,
+    /// and the simulator refits a copy rather than building its own.
     ///
     /// # Errors
     /// [`ClothError::WrongLength`] when the table is not over this garment's control points,

@@ -50,11 +50,9 @@ const UNPLACED: u32 = u32::MAX;
 /// per-substep order of the edges.
 #[derive(Clone, Debug)]
 pub(crate) struct StrainLimiter {
-    /// The order of the edges' visits.
+    /// The order of the edges' visits, from the fixed vertices, and after a collision pass
+    /// also the ones it moved.
     order: EdgeOrder,
-    /// The vertices `order` starts from: fixed ones, and after a collision pass the ones it
-    /// moved.
-    sources: Vec<bool>,
     /// The inverse masses of [`Self::limit_around`].
     weights: Vec<f64>,
     /// The places in `order` of the edges a sweep visits.
@@ -73,18 +71,12 @@ impl StrainLimiter {
         order.restart(|_| false);
         Self {
             order,
-            sources: vec![false; vertex_count],
             weights: Vec::with_capacity(vertex_count),
             pending: Pending::default(),
             settled: Vec::new(),
             settled_limit: 0.0,
             carried: Vec::new(),
         }
-    }
-
-    /// Whether the edges are ordered from other vertices than those `source` flags.
-    fn sources_changed(&self, source: impl Fn(usize) -> bool) -> bool {
-        !(0..self.sources.len()).all(|v| self.sources[v] == source(v))
     }
 
     /// Brings every edge of `springs` within `limit` (a fraction, e.g. 0.1) of its rest
@@ -139,16 +131,13 @@ impl StrainLimiter {
         let h = *h;
         let comparable = self.settled.len() == x.len() && self.settled_limit == limit;
         let source = |v: usize| inverse_mass[v] == 0.0 || moved.is_some_and(|moved| moved[v]);
-        let reordered = self.sources_changed(source);
+        let reordered = !self.order.starts_from(source);
         // The edges still pending from the last call, by edge: the new order moves their places.
         let mut carried = std::mem::take(&mut self.carried);
         carried.clear();
         if reordered {
             if comparable {
                 carried.extend(self.pending.places().map(|k| self.order.edge(k)));
-            }
-            for (v, f) in self.sources.iter_mut().enumerate() {
-                *f = source(v);
             }
             self.order.restart(source);
         }
@@ -389,6 +378,11 @@ impl EdgeOrder {
         self.order.clear();
         self.place.fill(UNPLACED);
         self.complete = false;
+    }
+
+    /// Whether the order starts from exactly the vertices `source` flags (its depth 0).
+    fn starts_from(&self, source: impl Fn(usize) -> bool) -> bool {
+        (0..self.depth.len()).all(|v| (self.depth[v] == 0) == source(v))
     }
 
     /// The edge at place `k` (placed).

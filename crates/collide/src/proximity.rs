@@ -38,7 +38,7 @@ use rayon::prelude::*;
 
 use crate::convert::{to_glam, to_point, to_vector};
 use crate::error::CollideError;
-use crate::hierarchy::{Hierarchy, Pending, check_distance, fresh};
+use crate::hierarchy::{Hierarchy, Pending, check_distance, finite, fresh};
 use crate::triangle::is_degenerate;
 use crate::{Point, Vector};
 
@@ -476,10 +476,7 @@ fn prune_bound(radius: f64) -> f64 {
 
 /// Checks that query points are finite.
 fn check_queries(queries: &[Point]) -> Result<(), CollideError> {
-    match queries
-        .iter()
-        .position(|p| !p.coords.iter().all(|c| c.is_finite()))
-    {
+    match queries.iter().position(|p| !finite(p)) {
         Some(point) => Err(CollideError::NonFiniteQuery { point }),
         None => Ok(()),
     }

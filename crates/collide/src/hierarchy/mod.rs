@@ -182,7 +182,7 @@ impl Hierarchy {
     /// bounds nothing (the queries that measure report such a point as an error).
     #[must_use]
     pub fn box_distance(&self, q: &Point) -> f64 {
-        if q.coords.iter().all(|c| c.is_finite()) {
+        if finite(q) {
             self.boxes.root_distance(to_glam(q))
         } else {
             f64::NAN
@@ -465,19 +465,28 @@ pub(crate) fn store(positions: &[Point], out: &mut Vec<DVec3>) {
 
 /// Checks that there are `expected` positions and that they are finite.
 pub(crate) fn check_positions(positions: &[Point], expected: usize) -> Result<(), CollideError> {
-    if positions.len() != expected {
-        return Err(CollideError::PositionCount {
+    check_count(positions, expected)?;
+    match positions.iter().position(|p| !finite(p)) {
+        Some(vertex) => Err(CollideError::NonFinitePosition { vertex }),
+        None => Ok(()),
+    }
+}
+
+/// Checks that a position array has `expected` entries.
+pub(crate) fn check_count(positions: &[Point], expected: usize) -> Result<(), CollideError> {
+    if positions.len() == expected {
+        Ok(())
+    } else {
+        Err(CollideError::PositionCount {
             expected,
             given: positions.len(),
-        });
+        })
     }
-    if let Some(vertex) = positions
-        .iter()
-        .position(|p| !p.coords.iter().all(|c| c.is_finite()))
-    {
-        return Err(CollideError::NonFinitePosition { vertex });
-    }
-    Ok(())
+}
+
+/// Whether every coordinate of `p` is finite.
+pub(crate) fn finite(p: &Point) -> bool {
+    p.coords.iter().all(|c| c.is_finite())
 }
 
 /// Checks that a distance parameter is a number `>= 0` (infinity allowed).

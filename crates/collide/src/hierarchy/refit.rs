@@ -23,7 +23,7 @@
 use parry3d_f64::math::Vector as DVec3;
 
 use super::boxes::Fit;
-use super::{Hierarchy, check_distance, check_positions, convert_into, store};
+use super::{Hierarchy, check_count, check_distance, check_positions, convert_into, finite, store};
 use crate::Point;
 use crate::ccd::CONTACT_SLACK;
 use crate::convert::{to_glam, to_point};
@@ -103,17 +103,8 @@ impl Hierarchy {
         let Some(margin) = self.swept_margin else {
             return Err(CollideError::NotSwept);
         };
-        let count = self.vertex_count();
-        if end.len() != count {
-            return Err(CollideError::PositionCount {
-                expected: count,
-                given: end.len(),
-            });
-        }
-        if let Some(&vertex) = moved
-            .iter()
-            .find(|&&v| !end[v as usize].coords.iter().all(|c| c.is_finite()))
-        {
+        check_count(end, self.vertex_count())?;
+        if let Some(&vertex) = moved.iter().find(|&&v| !finite(&end[v as usize])) {
             return Err(CollideError::NonFinitePosition {
                 vertex: vertex as usize,
             });
