@@ -29,7 +29,7 @@
 //! vertices × (u8 lifted)  vertices × (u8 stuck)  vertices × (f64 normal force)
 //! u8 previous (0 or 1), if 1: f64 step  vertices × (3 f64 position)  vertices × (3 f64 velocity)
 //! u32 rows  rows × (u32 frame, f64 ms, f64 strain, 2 u32 strained edge, u32 substeps, u32 cg,
-//!                   u64 penetrating, f64 deepest, u8 has deepest vertex, [u32 deepest vertex],
+//!                   3 u64 written, u64 penetrating, f64 deepest, u8 has deepest vertex, [u32 deepest vertex],
 //!                   u64 self-intersecting pairs, u8 has crossing faces, [2 u32 crossing faces])
 //! ```
 //!
@@ -55,7 +55,7 @@ use crate::output::write_atomically;
 use crate::scene::Fingerprint;
 
 const MAGIC: &[u8; 8] = b"TAILORCK";
-const VERSION: u32 = 6;
+const VERSION: u32 = 7;
 
 /// The checkpoint's file name.
 pub const FILE: &str = "tailor_checkpoint.bin";
@@ -81,6 +81,10 @@ pub struct FrameStats {
     pub substeps: u32,
     /// Conjugate-gradient iterations.
     pub cg_iterations: u32,
+    /// The length in bytes of each of the frame's files as written: the control mesh, the
+    /// surface, the body; 0 for one not written (a sequence the scene turns off, a frame
+    /// before the first asked for, a device written in place).
+    pub written: [u64; 3],
     /// What `tailor check` finds in the frame's output.
     pub findings: Findings,
 }
@@ -155,6 +159,9 @@ fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {
         }
         w.write_all(&s.substeps.to_le_bytes())?;
         w.write_all(&s.cg_iterations.to_le_bytes())?;
+        for length in s.written {
+            w.write_all(&length.to_le_bytes())?;
+        }
         w.write_all(&(f.penetrating_vertices as u64).to_le_bytes())?;
         w.write_all(&f.max_penetration.to_le_bytes())?;
         write_optional(w, f.deepest_vertex.as_ref().map(std::slice::from_ref))?;
@@ -323,6 +330,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint> {
                 strained_edge: [r.u32()?, r.u32()?],
                 substeps: r.u32()?,
                 cg_iterations: r.u32()?,
+                written: [r.u64()?, r.u64()?, r.u64()?],
                 findings: Findings {
                     penetrating_vertices: r.count()?,
                     max_penetration: r.f64()?,
@@ -390,6 +398,7 @@ mod tests {
                     strained_edge: [4, 1],
                     substeps: 5,
                     cg_iterations: 40,
+                    written: [0, u64::MAX, 1_234_567],
                     findings: Findings {
                         penetrating_vertices: 3,
                         max_penetration: 0.001,

@@ -9,7 +9,8 @@
 //! - A run stopped after a frame, killed midway, or interrupted by Ctrl-C (exit 130, no
 //!   temporary left) and resumed writes the same bytes as one uninterrupted run; a run removes
 //!   the temporaries of its own files that a killed run left, and nothing else; a finished shot resumed with more `frames` equals the longer shot;
-//!   a resume with any other change to the shot is refused, naming the key.
+//!   a resume with any other change to the shot is refused, naming the key, and so is one
+//!   whose frames before the checkpoint lost or changed their files.
 //! - Each bad input is refused before anything is written, with a message naming the file and
 //!   the key or line, and leaves an earlier run's output untouched.
 //! - A shot whose cloth is torn past its strain limit says so (a warning naming the frames and
@@ -374,6 +375,55 @@ fn stopped_and_resumed_run_writes_the_same_bytes() {
     let out = tailor(&[scene, "--out", parts_s, "--resume"]);
     let error = String::from_utf8_lossy(&out.stderr);
     assert!(error.contains("[cloth] mesh (the file) differs"), "{error}");
+}
+
+/// Something done to a file.
+type Damage = fn(&Path);
+
+/// Files are not forced to disk, so a power cut can lose frames a checkpoint counts as
+/// written: a resume refuses a frame file that is missing or of another length than the run
+/// wrote, naming it, and changes nothing; with the file back it resumes.
+#[test]
+fn a_resume_refuses_frames_lost_since_the_checkpoint() {
+    let dir = scratch("simulate_cli_lost_frames");
+    let scene = shot(&dir, &[]);
+    let scene = scene.to_str().unwrap();
+    let parts = dir.join("parts");
+    let parts_s = parts.to_str().unwrap();
+    run_ok(&[scene, "--out", parts_s, "--stop-after", "5", "--quiet"]);
+    let written = everything(&parts);
+    let truncate: Damage = |path| fs::write(path, b"").unwrap();
+    let remove: Damage = |path| fs::remove_file(path).unwrap();
+    let lengthen: Damage = |path| {
+        let mut bytes = fs::read(path).unwrap();
+        bytes.push(b'\n');
+        fs::write(path, bytes).unwrap();
+    };
+    let longer = format!("is {} bytes", written["cloth_control_0000.obj"].len() + 1);
+    let damages = [
+        ("cloth_0003.obj", truncate, "is 0 bytes"),
+        ("body_0005.obj", remove, "is missing"),
+        ("cloth_control_0000.obj", lengthen, &longer),
+    ];
+    for (name, damage, found) in damages {
+        let path = parts.join(name);
+        damage(&path);
+        let damaged = everything(&parts);
+        let out = tailor(&[scene, "--out", parts_s, "--resume", "--quiet"]);
+        assert_eq!(out.status.code(), Some(1), "{name}");
+        let error = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            error.contains(&format!("{name} {found}")) && error.contains("run without --resume"),
+            "{error}"
+        );
+        assert!(
+            everything(&parts) == damaged,
+            "a refused resume changed files"
+        );
+        fs::write(&path, &written[name]).unwrap();
+    }
+    run_ok(&[scene, "--out", parts_s, "--resume", "--quiet"]);
+    assert!(parts.join("cloth_0010.obj").exists());
 }
 
 #[test]

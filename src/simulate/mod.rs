@@ -23,7 +23,9 @@
 //! Before the first frame, a run removes the temporaries that killed runs left in the output
 //! directory and, unless it resumes, the files of an earlier run there: its own files' only
 //! ([`outputs`]). Ctrl-C stops the run after the frame being
-//! written, with its checkpoint, exit status 130 ([`crate::interrupt`]).
+//! written, with its checkpoint, exit status 130 ([`crate::interrupt`]). A resumed run first
+//! checks that the frames its checkpoint counts are there with the lengths they were written
+//! with ([`outputs::check_written`]): files are not forced to disk ([`crate::output`]).
 //!
 //! Work runs on a rayon pool of `--threads` threads; every parallel loop in the crates reduces
 //! in a fixed order, so the bytes written do not depend on the count. With two threads or more,
@@ -60,6 +62,7 @@ use crate::interrupt;
 use crate::output::{self, write_atomically};
 use crate::scene::{self, Scene};
 use attach::Bindings;
+use outputs::Sequence;
 use surface::Surface;
 
 /// Strain (|l/L − 1| of an edge) past which a run counts as diverged: an edge ten times
@@ -72,7 +75,8 @@ pub const MAX_STRAIN: f64 = 10.0;
     after_help = "Writes per frame cloth_control_####.obj (the simulated control mesh, \
 with UVs and groups), cloth_####.obj (its Catmull-Clark surface) and body_####.obj (the refined \
 body), frame 0 being the rest pose; then summary.json. A checkpoint (tailor_checkpoint.bin) is \
-written after every frame for --resume. A frame fails its quality when an edge ends it more \
+written after every frame for --resume, which refuses a frame before it whose file is missing \
+or not the length written. A frame fails its quality when an edge ends it more \
 than 1 percentage point past the scene's strain_limit (a 10% limit fails above 11%; not judged \
 when the limit is 0) or tailor check's test finds a penetration or a self-intersection; each \
 failure is warned about on standard error (frames, worst value, where on the garment) and listed \
@@ -240,6 +244,7 @@ fn simulate(args: &Args) -> Result<Outcome> {
     }
     let (mut state, stats, next) = match resumed {
         Some(c) => {
+            outputs::check_written(&dir, &c.stats)?;
             shot.simulator.restore_contact_state(&c.contacts)?;
             (c.state, c.stats, c.frame + 1)
         }
@@ -700,7 +705,7 @@ impl<'a> Output<'a> {
             row.findings = inspect(self)?;
         }
         if frame >= self.first {
-            self.write(frame, &state)?;
+            row.written = self.write(frame, &state)?;
         }
         self.stats.push(row);
         checkpoint::save(
@@ -715,29 +720,43 @@ impl<'a> Output<'a> {
         )
     }
 
-    /// Writes frame `frame`'s files into `dir`.
-    fn write(&mut self, frame: u32, state: &State) -> Result<()> {
-        let name = |prefix: &str| self.dir.join(format!("{prefix}_{frame:04}.obj"));
+    /// Writes frame `frame`'s files into `dir`; returns their lengths as the checkpoint
+    /// records them ([`FrameStats::written`]).
+    fn write(&mut self, frame: u32, state: &State) -> Result<[u64; 3]> {
+        let name = |sequence| outputs::frame_file(self.dir, sequence, frame);
         let out = &self.scene.output;
+        let mut written = [0; 3];
+        let mut record = |sequence: Sequence| -> Result<()> {
+            let path = name(sequence);
+            let meta =
+                fs::metadata(&path).with_context(|| format!("reading {}", path.display()))?;
+            if meta.is_file() {
+                written[sequence as usize] = meta.len();
+            }
+            Ok(())
+        };
         if out.control_mesh {
             if let Some(control) = &mut self.control_surface {
                 control.set(state.positions.clone(), out.precision)?;
                 control.round_crossings_apart(&state.positions, out.precision)?;
             }
             let written = self.control_surface.as_ref().unwrap_or(&self.cloth);
-            write_atomically(&name("cloth_control"), |w| {
+            write_atomically(&name(Sequence::Control), |w| {
                 self.control.write(written.mesh().positions(), None, w)
             })?;
+            record(Sequence::Control)?;
         }
         self.cloth
-            .write(&name("cloth"), &state.positions, &self.cloth_text)?;
+            .write(&name(Sequence::Surface), &state.positions, &self.cloth_text)?;
+        record(Sequence::Surface)?;
         if out.body
             && let (Some(surface), Some(text), Some(body)) =
                 (&self.body, &self.body_text, &self.scene.body)
         {
-            surface.write(&name("body"), body.control(frame), text)?;
+            surface.write(&name(Sequence::Body), body.control(frame), text)?;
+            record(Sequence::Body)?;
         }
-        Ok(())
+        Ok(written)
     }
 }
 

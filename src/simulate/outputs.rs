@@ -10,17 +10,70 @@
 //! there (the demo's `input/`), and so may the user's own files, hidden or not.
 
 use std::fs;
-use std::path::Path;
+use std::io;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 
 use super::summary;
-use crate::checkpoint;
+use crate::checkpoint::{self, FrameStats};
 use crate::output;
 use crate::sequence::Pattern;
 
-/// The frame sequences a run writes.
+/// The frame sequences a run writes, in the order a checkpoint records their files' lengths
+/// ([`crate::checkpoint::FrameStats::written`]).
 const SEQUENCES: [&str; 3] = ["cloth_control_####.obj", "cloth_####.obj", "body_####.obj"];
+
+/// Which sequence: an index into [`SEQUENCES`].
+#[derive(Clone, Copy, Debug)]
+pub enum Sequence {
+    Control = 0,
+    Surface = 1,
+    Body = 2,
+}
+
+/// Frame `frame`'s file of `sequence` in `dir`.
+pub fn frame_file(dir: &Path, sequence: Sequence, frame: u32) -> PathBuf {
+    numbered(dir, sequence as usize, frame)
+}
+
+fn numbered(dir: &Path, sequence: usize, frame: u32) -> PathBuf {
+    Pattern::parse(&dir.join(SEQUENCES[sequence]))
+        .expect("a numbered file name")
+        .path(frame)
+}
+
+/// Checks that the frames of `stats` (a checkpoint's) are in `dir` as the run wrote them:
+/// every file it wrote there with the length it had. Files are not forced to disk (see
+/// [`crate::output`]), so a power cut can lose the last frames a checkpoint counts as
+/// written; resuming after them would leave those frames empty or missing for good.
+///
+/// # Errors
+/// The first file missing or of another length, naming it, or one that cannot be read.
+pub fn check_written(dir: &Path, stats: &[FrameStats]) -> Result<()> {
+    for row in stats {
+        for (sequence, &length) in row.written.iter().enumerate() {
+            if length == 0 {
+                continue;
+            }
+            let file = numbered(dir, sequence, row.frame);
+            let found = match fs::metadata(&file) {
+                Ok(meta) if meta.len() == length => continue,
+                Ok(meta) => format!("is {} bytes", meta.len()),
+                Err(e) if e.kind() == io::ErrorKind::NotFound => "is missing".to_owned(),
+                Err(e) => return Err(e).with_context(|| format!("reading {}", file.display())),
+            };
+            bail!(
+                "{} {found}, where the run that wrote the checkpoint wrote {length} bytes: a \
+                 frame it counts as written was lost or changed since (files are not forced \
+                 to disk, and a power cut can lose the last ones); run without --resume to \
+                 start over",
+                file.display()
+            );
+        }
+    }
+    Ok(())
+}
 
 /// Whether `name` is a file a run writes: a frame of its sequences, the checkpoint or the
 /// summary.
