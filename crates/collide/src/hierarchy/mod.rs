@@ -19,6 +19,7 @@ use parry3d_f64::math::Vector as DVec3;
 use rayon::prelude::*;
 
 use crate::Point;
+use crate::cones::Witnesses;
 use crate::convert::to_glam;
 use crate::error::CollideError;
 use crate::memory::heap;
@@ -69,6 +70,9 @@ pub struct Hierarchy {
     swept_margin: Option<f64>,
     /// How many refits this value has had (see [`Hierarchy::refit_count`]).
     refits: u64,
+    /// The triangle that last failed each node's and each vertex star's normal-cone test
+    /// (see [`crate::cones`]).
+    pub(crate) witnesses: Witnesses,
 }
 
 impl Hierarchy {
@@ -107,12 +111,16 @@ impl Hierarchy {
             end: Vec::new(),
             swept_margin: None,
             refits: 0,
+            witnesses: Witnesses::default(),
         };
         hierarchy.leaf_counts = hierarchy.fold_up(|_| 1, |a, b| a + b);
         hierarchy.order_leaves();
         (hierarchy.boundary_offsets, hierarchy.boundary) = build::boundary_chains(&hierarchy);
         hierarchy.boxes = Boxes::new(hierarchy.face_count(), &hierarchy.children);
         hierarchy.refit_boxes(0.0);
+        hierarchy.witnesses = Witnesses::new(
+            hierarchy.face_count() + hierarchy.children.len() + hierarchy.vertex_count(),
+        );
         Ok(hierarchy)
     }
 
@@ -136,6 +144,7 @@ impl Hierarchy {
             + self.boxes.memory_bytes()
             + heap(&self.start)
             + heap(&self.end)
+            + self.witnesses.memory_bytes()
     }
 
     /// Number of faces (leaves).
