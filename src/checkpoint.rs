@@ -29,8 +29,9 @@
 //! vertices × (u8 lifted)  vertices × (u8 stuck)  vertices × (f64 normal force)
 //! u8 previous (0 or 1), if 1: f64 step  vertices × (3 f64 position)  vertices × (3 f64 velocity)
 //! u32 rows  rows × (u32 frame, f64 ms, f64 strain, 2 u32 strained edge, u32 substeps, u32 cg,
-//!                   3 u64 written, u64 penetrating, f64 deepest, u8 has deepest vertex, [u32 deepest vertex],
-//!                   u64 self-intersecting pairs, u8 has crossing faces, [2 u32 crossing faces])
+//!                   3 u64 written, u64 penetrating, f64 deepest, u8 has deepest vertex,
+//!                   [u32 deepest vertex], u64 self-intersecting pairs, u8 has crossing faces,
+//!                   [2 u32 crossing faces])
 //! ```
 //!
 //! The bracketed fields are there only when the flag before them is 1. The deepest vertex
@@ -109,7 +110,8 @@ pub struct Checkpoint {
 /// # Errors
 /// Any I/O error, naming the file.
 pub fn save(dir: &Path, checkpoint: &Checkpoint) -> Result<()> {
-    write_atomically(&path(dir), |w| encode(checkpoint, w))
+    write_atomically(&path(dir), |w| encode(checkpoint, w))?;
+    Ok(())
 }
 
 fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {

@@ -152,5 +152,6 @@ fn write_file(path: &Path, text: &str) -> Result<()> {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("creating {}", parent.display()))?;
     }
-    write_atomically(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+    write_atomically(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+    Ok(())
 }

@@ -72,21 +72,23 @@ pub fn print(text: &str) -> Result<()> {
     write_to(Path::new("-"), |w| w.write_all(text.as_bytes()))
 }
 
-/// Writes `path` atomically with the bytes `write` produces.
+/// Writes `path` atomically with the bytes `write` produces. Returns the length of the file
+/// written, 0 for a device or FIFO written in place.
 ///
 /// # Errors
 /// Any I/O error, with the path in the message; the temporary file is removed on failure.
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
-) -> Result<()> {
-    (|| -> io::Result<()> {
+) -> Result<u64> {
+    (|| -> io::Result<u64> {
         let target = follow_links(path)?;
         match fs::metadata(&target) {
             Ok(meta) if !meta.is_file() && !meta.is_dir() => {
                 let mut out = BufWriter::new(OpenOptions::new().write(true).open(&target)?);
                 write(&mut out)?;
-                out.flush()
+                out.flush()?;
+                Ok(0)
             }
             _ => replace(&target, write),
         }
@@ -94,18 +96,20 @@ pub fn write_atomically(
     .with_context(|| format!("writing {}", path.display()))
 }
 
-/// Writes a temporary file beside `path` and renames it over `path`; the temporary is
-/// removed on failure.
+/// Writes a temporary file beside `path` and renames it over `path`; returns its length. The
+/// temporary is removed on failure.
 fn replace(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
-) -> io::Result<()> {
+) -> io::Result<u64> {
     let tmp = temporary_path(path);
-    let result = (|| -> io::Result<()> {
+    let result = (|| -> io::Result<u64> {
         let mut out = BufWriter::new(File::create(&tmp)?);
         write(&mut out)?;
         out.flush()?;
-        fs::rename(&tmp, path)
+        let length = out.get_ref().metadata()?.len();
+        fs::rename(&tmp, path)?;
+        Ok(length)
     })();
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
@@ -171,7 +175,8 @@ pub fn write_to(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()
             .and_then(|()| lock.flush())
             .map_err(stdout_error)
     } else {
-        write_atomically(path, |w| write(w))
+        write_atomically(path, |w| write(w))?;
+        Ok(())
     }
 }
 

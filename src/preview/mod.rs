@@ -124,7 +124,8 @@ pub fn render_sheet(frames: &[FrameMeshes], options: &Options) -> Picture {
 /// # Errors
 /// When the file cannot be written.
 pub fn write_png(path: &Path, picture: &Picture) -> Result<()> {
-    write_atomically(path, |out| picture.write_png(out))
+    write_atomically(path, |out| picture.write_png(out))?;
+    Ok(())
 }
 
 /// Largest tile side accepted by `--size` (it is rendered at twice that).

@@ -726,35 +726,26 @@ impl<'a> Output<'a> {
         let name = |sequence| outputs::frame_file(self.dir, sequence, frame);
         let out = &self.scene.output;
         let mut written = [0; 3];
-        let mut record = |sequence: Sequence| -> Result<()> {
-            let path = name(sequence);
-            let meta =
-                fs::metadata(&path).with_context(|| format!("reading {}", path.display()))?;
-            if meta.is_file() {
-                written[sequence as usize] = meta.len();
-            }
-            Ok(())
-        };
         if out.control_mesh {
             if let Some(control) = &mut self.control_surface {
                 control.set(state.positions.clone(), out.precision)?;
                 control.round_crossings_apart(&state.positions, out.precision)?;
             }
-            let written = self.control_surface.as_ref().unwrap_or(&self.cloth);
-            write_atomically(&name(Sequence::Control), |w| {
-                self.control.write(written.mesh().positions(), None, w)
-            })?;
-            record(Sequence::Control)?;
+            let surface = self.control_surface.as_ref().unwrap_or(&self.cloth);
+            written[Sequence::Control as usize] =
+                write_atomically(&name(Sequence::Control), |w| {
+                    self.control.write(surface.mesh().positions(), None, w)
+                })?;
         }
-        self.cloth
-            .write(&name(Sequence::Surface), &state.positions, &self.cloth_text)?;
-        record(Sequence::Surface)?;
+        written[Sequence::Surface as usize] =
+            self.cloth
+                .write(&name(Sequence::Surface), &state.positions, &self.cloth_text)?;
         if out.body
             && let (Some(surface), Some(text), Some(body)) =
                 (&self.body, &self.body_text, &self.scene.body)
         {
-            surface.write(&name(Sequence::Body), body.control(frame), text)?;
-            record(Sequence::Body)?;
+            written[Sequence::Body as usize] =
+                surface.write(&name(Sequence::Body), body.control(frame), text)?;
         }
         Ok(written)
     }

@@ -235,7 +235,7 @@ impl Surface {
     ///
     /// # Errors
     /// Any I/O error, naming the file.
-    pub fn write(&self, path: &Path, control: &[Point], text: &Frames) -> Result<()> {
+    pub fn write(&self, path: &Path, control: &[Point], text: &Frames) -> Result<u64> {
         let normals = self.tangents.as_ref().map(|[t1, t2]| {
             let coords: Vec<Vector3<f64>> = control.iter().map(|p| p.coords).collect();
             let mut a = vec![Vector3::zeros(); t1.len()];

@@ -50,8 +50,9 @@
 //! Given the stencils of the subdivided surface ([`Simulator::set_collision_surface`]), the
 //! simulator also keeps every point of that surface, the one that renders, a full thickness
 //! from the body, and given its faces too (as their collision hierarchy), with
-//! self-collision on, keeps it from passing through itself. After each solve, strain limiting (Provot 1995) keeps every edge within
-//! [`Settings::strain_limit`] of its rest length.
+//! self-collision on, keeps it from passing through itself. After each solve, strain
+//! limiting (Provot 1995) keeps every edge within [`Settings::strain_limit`] of its rest
+//! length.
 #![warn(missing_docs)]
 
 mod assemble;

@@ -235,7 +235,7 @@ impl<'a> Stars<'a> {
                 let faces = self.h.vertex_faces().of(v as usize);
                 let cleared =
                     star_boundary(&self.h.topology, v, faces).is_some_and(|(boundary, len)| {
-                        let slot = Witnesses::star(self.h, v);
+                        let slot = Witnesses::star(self.h, v as usize);
                         self.cones.superface_cannot_self_collide(
                             self.h,
                             faces,
@@ -268,14 +268,15 @@ impl Clone for Witnesses {
 }
 
 impl Witnesses {
-    /// No witness in any of `slots`.
-    pub(crate) fn new(slots: usize) -> Self {
+    /// No witness yet for any node or star of `h`.
+    pub(crate) fn of(h: &Hierarchy) -> Self {
+        let slots = Self::star(h, h.vertex_count());
         Self((0..slots).map(|_| AtomicU32::new(0)).collect())
     }
 
     /// The slot of vertex `v`'s star in `h`, after its nodes'.
-    fn star(h: &Hierarchy, v: u32) -> usize {
-        h.face_count() + h.children.len() + v as usize
+    fn star(h: &Hierarchy, v: usize) -> usize {
+        h.face_count() + h.children.len() + v
     }
 
     fn get(&self, slot: usize) -> Option<usize> {

@@ -118,9 +118,7 @@ impl Hierarchy {
         (hierarchy.boundary_offsets, hierarchy.boundary) = build::boundary_chains(&hierarchy);
         hierarchy.boxes = Boxes::new(hierarchy.face_count(), &hierarchy.children);
         hierarchy.refit_boxes(0.0);
-        hierarchy.witnesses = Witnesses::new(
-            hierarchy.face_count() + hierarchy.children.len() + hierarchy.vertex_count(),
-        );
+        hierarchy.witnesses = Witnesses::of(&hierarchy);
         Ok(hierarchy)
     }
 
