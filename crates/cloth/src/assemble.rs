@@ -107,7 +107,7 @@ impl Gather {
         }
     }
 
-    /// Σ weight · slots[slot] over the sources of output `r`.
+    /// Σ weight · `slots[slot]` over the sources of output `r`.
     fn sum<T>(&self, r: usize, slots: &[T]) -> T
     where
         T: Copy + std::ops::Mul<f64, Output = T> + std::iter::Sum,

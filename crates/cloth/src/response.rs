@@ -35,9 +35,10 @@
 //!    face of the garment, and every edge within it of another edge, an impulse that stops the
 //!    pair approaching and starts separating it by a tenth of the overlap per step (Bridson
 //!    et al. §7.1), except the pairs the rest shape itself puts that near (see the
-//!    `self_collision` module). Stopping an approach at once strains the edges around the
-//!    pair, so strain limiting runs again with the vertices it moved a hundred times heavier:
-//!    the cloth around them takes up the slack.
+//!    `self_collision` module). The pairs are those of the substep's start, which the
+//!    simulator finds while it solves ([`crate::collision::Garment::find_near`]). Stopping an
+//!    approach at once strains the edges around the pair, so strain limiting runs again with
+//!    the vertices it moved a hundred times heavier: the cloth around them takes up the slack.
 //! 4. **Self impacts, the fail-safe** ([`Collisions::impulse_round`],
 //!    [`Collisions::impact_zones`]): continuous vertex–triangle and edge–edge tests over the
 //!    straight-line motion; each impact gets an inelastic impulse at the time of contact, each
@@ -283,7 +284,7 @@ impl Response {
                 settings.thickness,
                 &mut motion.weighted(&self.held),
                 &mut self.moved,
-            )?;
+            );
             // Collision impulses stop features approaching at once, which strains the edges
             // around them: limit again after them, the cloth around taking up the slack.
             self.strain.around(springs, limit, &mut motion, &self.moved);

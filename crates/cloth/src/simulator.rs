@@ -819,6 +819,81 @@ impl Simulator {
         report: &mut StepReport,
     ) -> Result<(), SubstepError> {
         let t1 = state.time + h;
+        // Repulsion's pairs depend on the substep's start alone: with self-collision they are
+        // found beside the body contacts and the solve, which leave a core idle much of the
+        // time (their passes are short and partly serial), and wait after it (step 3 of
+        // [`crate::response`]).
+        let at = if self.settings.self_collision {
+            let mut garment = self.response.collisions_mut().take_garment();
+            let thickness = self.settings.thickness;
+            let x0 = &state.positions;
+            let (solved, found) = rayon::join(
+                || self.solve_from(state, h, report),
+                || garment.find_near(thickness, x0),
+            );
+            self.response.collisions_mut().give_back(garment);
+            let at = solved?;
+            found?;
+            at
+        } else {
+            self.solve_from(state, h, report)?
+        };
+        let w = &mut self.work;
+        for i in 0..w.x.len() {
+            if w.filter.placed[i] {
+                w.x[i] = w.filter.goal[i];
+            }
+            w.inverse_mass[i] = if w.filter.placed[i] {
+                0.0
+            } else {
+                1.0 / self.model.mass[i]
+            };
+        }
+        let finite = at.is_finite()
+            && w.x.iter().all(|p| p.iter().all(|c| c.is_finite()))
+            && w.trial.iter().all(|v| v.iter().all(|c| c.is_finite()));
+        if !finite {
+            return Err(StepFailure::NonFinite.into());
+        }
+        let integrator = Substep {
+            h: w.base_step,
+            x0: &w.base,
+            x: &mut w.x,
+            v: &mut w.trial,
+            inverse_mass: &w.inverse_mass,
+        };
+        // The time the solve's contact impulses act over: its step ĥ, or for BDF2's
+        // trapezoidal start the whole substep, whose explicit half's forces they also cancel.
+        let trapezoidal = self.settings.integrator == Integrator::Bdf2 && state.previous.is_none();
+        let contact = Impulses {
+            impulse: &w.impulse,
+            span: if trapezoidal { h } else { w.base_step },
+        };
+        let springs = &self.model.springs;
+        let impacts =
+            self.response
+                .after_solve(&self.settings, springs, integrator, &w.x0, h, contact);
+        report.strain_corrections += self.response.take_strain_corrections();
+        let impacts = impacts?;
+        state.remember(h);
+        state.positions.copy_from_slice(&w.x);
+        state.velocities.copy_from_slice(&w.trial);
+        state.time = t1;
+        report.substeps += 1;
+        report.contacts = self.response.collisions().contacts().len() as u32;
+        report.impacts += impacts;
+        Ok(())
+    }
+
+    /// The body contacts and the Newton iterations of the substep of length `h` from `state`:
+    /// the end positions and velocities in `work.x` and `work.trial`; returns Φ there.
+    fn solve_from(
+        &mut self,
+        state: &State,
+        h: f64,
+        report: &mut StepReport,
+    ) -> Result<f64, SubstepError> {
+        let t1 = state.time + h;
         let w = &mut self.work;
         w.x0.copy_from_slice(&state.positions);
         w.v0.copy_from_slice(&state.velocities);
@@ -879,51 +954,7 @@ impl Simulator {
                 alpha *= 0.5;
             }
         }
-        let w = &mut self.work;
-        for i in 0..w.x.len() {
-            if w.filter.placed[i] {
-                w.x[i] = w.filter.goal[i];
-            }
-            w.inverse_mass[i] = if w.filter.placed[i] {
-                0.0
-            } else {
-                1.0 / self.model.mass[i]
-            };
-        }
-        let finite = at.is_finite()
-            && w.x.iter().all(|p| p.iter().all(|c| c.is_finite()))
-            && w.trial.iter().all(|v| v.iter().all(|c| c.is_finite()));
-        if !finite {
-            return Err(StepFailure::NonFinite.into());
-        }
-        let integrator = Substep {
-            h: w.base_step,
-            x0: &w.base,
-            x: &mut w.x,
-            v: &mut w.trial,
-            inverse_mass: &w.inverse_mass,
-        };
-        // The time the solve's contact impulses act over: its step ĥ, or for BDF2's
-        // trapezoidal start the whole substep, whose explicit half's forces they also cancel.
-        let trapezoidal = self.settings.integrator == Integrator::Bdf2 && state.previous.is_none();
-        let contact = Impulses {
-            impulse: &w.impulse,
-            span: if trapezoidal { h } else { w.base_step },
-        };
-        let springs = &self.model.springs;
-        let impacts =
-            self.response
-                .after_solve(&self.settings, springs, integrator, &w.x0, h, contact);
-        report.strain_corrections += self.response.take_strain_corrections();
-        let impacts = impacts?;
-        state.remember(h);
-        state.positions.copy_from_slice(&w.x);
-        state.velocities.copy_from_slice(&w.trial);
-        state.time = t1;
-        report.substeps += 1;
-        report.contacts = self.response.collisions().contacts().len() as u32;
-        report.impacts += impacts;
-        Ok(())
+        Ok(at)
     }
 
     /// Advances `state` by `dt` seconds with symplectic (semi-implicit) Euler,

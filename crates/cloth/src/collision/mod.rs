@@ -52,13 +52,36 @@ pub(crate) struct Collisions {
     obstacle: Option<Obstacle>,
     /// The refined surface that must clear the obstacle, when the caller gave one.
     surface: Option<Surface>,
-    cloth: Hierarchy,
+    /// The garment's hierarchy and self-collision buffers; out only while
+    /// [`Self::take_garment`] lent them.
+    garment: Option<Garment>,
     /// The body contacts of the current substep.
     contacts: Vec<Contact>,
     /// Friction on the body contacts, and what it carries between substeps.
     friction: Friction,
-    /// The self-collision queries' answers, reused.
+}
+
+/// The garment's hierarchy and the self-collision queries' answers, reused from substep to
+/// substep: what repulsion's pairs need ([`Garment::find_near`]), so that the simulator can
+/// lend them out to find those pairs beside its solve ([`Collisions::take_garment`]).
+#[derive(Clone, Debug)]
+pub(crate) struct Garment {
+    cloth: Hierarchy,
     layers: self_collision::Buffers,
+}
+
+impl Garment {
+    /// Repulsion's pairs at the substep's start `x0` (see [`self_collision::find_near`]), for
+    /// [`Collisions::repel`] after the solve.
+    pub fn find_near(&mut self, thickness: f64, x0: &[Point]) -> Result<(), CollideError> {
+        self_collision::find_near(&mut self.cloth, thickness, x0, &mut self.layers)
+    }
+}
+
+/// The garment of `slot`, which is back from every loan before a pass needs it.
+fn lent_back(slot: &mut Option<Garment>) -> &mut Garment {
+    slot.as_mut()
+        .expect("the garment is given back before the passes after the solve")
 }
 
 impl Collisions {
@@ -75,10 +98,9 @@ impl Collisions {
         Ok(Self {
             obstacle: None,
             surface: None,
-            cloth,
+            garment: Some(Garment { cloth, layers }),
             contacts: Vec::new(),
             friction: Friction::new(n),
-            layers,
         })
     }
 
@@ -230,15 +252,26 @@ impl Collisions {
             .after_solve(&self.contacts, contact, settings.friction, motion);
     }
 
-    /// Self repulsion (step 3 of [`crate::response`]) on `motion`; `moved` flags the vertices
-    /// whose velocities it changed.
-    pub fn repel(
-        &mut self,
-        thickness: f64,
-        motion: &mut Substep,
-        moved: &mut [bool],
-    ) -> Result<(), CollideError> {
-        self_collision::repel(&mut self.cloth, thickness, motion, &mut self.layers, moved)
+    /// Lends out the garment's hierarchy and self-collision buffers, to find repulsion's pairs
+    /// at the start of a substep ([`Garment::find_near`]) while the solve runs; give them back
+    /// with [`Self::give_back`] before the passes after it.
+    pub fn take_garment(&mut self) -> Garment {
+        self.garment
+            .take()
+            .expect("the garment is lent out once at a time")
+    }
+
+    /// Takes back what [`Self::take_garment`] lent.
+    pub fn give_back(&mut self, garment: Garment) {
+        self.garment = Some(garment);
+    }
+
+    /// Self repulsion (step 3 of [`crate::response`]) on `motion`, on the pairs
+    /// [`Garment::find_near`] found at the substep's start; `moved` flags the vertices whose
+    /// velocities it changed.
+    pub fn repel(&mut self, thickness: f64, motion: &mut Substep, moved: &mut [bool]) {
+        let Garment { cloth, layers } = lent_back(&mut self.garment);
+        self_collision::repel(cloth, thickness, motion, layers, moved);
     }
 
     /// One round of self-impact impulses of `layers` (steps 4 and 8 of [`crate::response`],
@@ -252,7 +285,8 @@ impl Collisions {
     ) -> Result<Option<(u32, &[bool])>, CollideError> {
         match layers {
             Layers::Garment => {
-                self_collision::impulse_round(&mut self.cloth, thickness, motion, &mut self.layers)
+                let Garment { cloth, layers } = lent_back(&mut self.garment);
+                self_collision::impulse_round(cloth, thickness, motion, layers)
             }
             Layers::Surface => match self.surface.as_mut().and_then(Surface::layers) {
                 Some((stencils, surface)) => surface.impulse_round(stencils, thickness, motion),
@@ -270,7 +304,8 @@ impl Collisions {
     ) -> Result<u32, CollideError> {
         match layers {
             Layers::Garment => {
-                self_collision::impact_zones(&mut self.cloth, motion, &mut self.layers)
+                let Garment { cloth, layers } = lent_back(&mut self.garment);
+                self_collision::impact_zones(cloth, motion, layers)
             }
             Layers::Surface => match self.surface.as_mut().and_then(Surface::layers) {
                 Some((stencils, surface)) => surface.impact_zones(stencils, motion),
@@ -283,10 +318,11 @@ impl Collisions {
     /// vertices they moved, none without an obstacle.
     pub fn push_out(&mut self, thickness: f64, motion: &mut Substep) -> Result<u32, CollideError> {
         match &mut self.obstacle {
-            Some(obstacle) => Ok(
-                obstacle.resolve_impacts(&mut self.cloth, thickness, motion)?
-                    + obstacle.project(thickness, motion)?,
-            ),
+            Some(obstacle) => Ok(obstacle.resolve_impacts(
+                &mut lent_back(&mut self.garment).cloth,
+                thickness,
+                motion,
+            )? + obstacle.project(thickness, motion)?),
             None => Ok(0),
         }
     }

@@ -169,28 +169,41 @@ impl SelfImpacts {
     }
 }
 
-/// Repulsion: every vertex within `thickness` of a face, and every edge within it of another,
-/// at the start of the substep stops approaching it and separates by a tenth of the overlap
-/// per substep, except the pairs the rest shape holds that near (the faces around each vertex
-/// that `buffers` lists; see the module docs); `moved` flags the vertices whose velocities it
-/// changed.
-pub(super) fn repel(
+/// Repulsion's pairs at the substep's start `x0`: every vertex within `thickness` of a face,
+/// and every edge within it of another, except the pairs the rest shape holds that near (the
+/// faces around each vertex that `buffers` lists; see the module docs), into `buffers` for
+/// [`repel`]. They depend on the start alone, so the simulator finds them beside the solve.
+pub(super) fn find_near(
     cloth: &mut Hierarchy,
     thickness: f64,
-    m: &mut Substep,
+    x0: &[Point],
     buffers: &mut Buffers,
-    moved: &mut [bool],
 ) -> Result<(), CollideError> {
-    moved.fill(false);
     let Buffers {
         local,
         near,
         edges_near,
         ..
     } = buffers;
-    cloth.refit(m.x0, 0.0)?;
+    cloth.refit(x0, 0.0)?;
     cloth.self_proximity_into(thickness, local, near)?;
-    cloth.edge_proximity_into(thickness, local, edges_near)?;
+    cloth.edge_proximity_into(thickness, local, edges_near)
+}
+
+/// Repulsion on the pairs [`find_near`] found at the start of this substep: each stops
+/// approaching and separates by a tenth of the overlap per substep; `moved` flags the
+/// vertices whose velocities it changed.
+pub(super) fn repel(
+    cloth: &Hierarchy,
+    thickness: f64,
+    m: &mut Substep,
+    buffers: &Buffers,
+    moved: &mut [bool],
+) {
+    moved.fill(false);
+    let Buffers {
+        near, edges_near, ..
+    } = buffers;
     let x0 = m.x0;
     let mut push = |vertices: [u32; 4], alpha: [f64; 4], normal: Vec3, distance: f64| {
         let target = SEPARATION * (thickness - distance) / m.h;
@@ -237,7 +250,6 @@ pub(super) fn repel(
     if moved.contains(&true) {
         m.sync_positions();
     }
-    Ok(())
 }
 
 /// One contact of the continuous query as four weighted vertices and a unit normal at the
