@@ -128,31 +128,47 @@ fn children(h: &Hierarchy, node: u32) -> Option<[Boxed; 2]> {
     })
 }
 
+/// Node pairs still to cross on one thread, nearest last (see [`Walk::cross_serial`]).
+type Pending = Vec<(Boxed, Boxed)>;
+
 impl<V: Sync> Walk<'_, V> {
+    /// Whether the pair of nodes `a` of `ha` and `b` of `hb` can hold overlapping leaves: their
+    /// boxes overlap, and in a walk of what moved, one of them moved.
+    #[inline(always)]
+    fn meets(&self, a: &Boxed, b: &Boxed) -> bool {
+        !self
+            .dirty
+            .is_some_and(|d| !d[self.ha.node_id(a.0)] && !d[self.hb.node_id(b.0)])
+            && overlap(&a.1, &b.1, self.pad)
+    }
+
+    /// The two pairs that split `(a, b)`, the larger side split (`a` on ties), or `None` when
+    /// both are leaves. A leaf covers one face and an internal node at least two, so when the
+    /// larger side is a leaf both are. Also the sizes of `a` and `b`.
+    #[inline(always)]
+    fn split(&self, a: Boxed, b: Boxed) -> (Option<[(Boxed, Boxed); 2]>, u32, u32) {
+        let (size_a, size_b) = (size(self.ha, a.0), size(self.hb, b.0));
+        let halves = if size_a >= size_b
+            && let Some([a0, a1]) = children(self.ha, a.0)
+        {
+            Some([(a0, b), (a1, b)])
+        } else {
+            children(self.hb, b.0).map(|[b0, b1]| [(a, b0), (a, b1)])
+        };
+        (halves, size_a, size_b)
+    }
+
     /// Visits the overlapping leaf pairs below node `a` of `ha` and node `b` of `hb`. The
     /// boxes travel with the nodes: a child's box is read from its parent's record.
     fn cross<T: Send>(&self, a: Boxed, b: Boxed, out: &mut Vec<T>)
     where
         V: Fn(u32, u32, &mut Vec<T>),
     {
-        let (ha, hb) = (self.ha, self.hb);
-        if self
-            .dirty
-            .is_some_and(|d| !d[ha.node_id(a.0)] && !d[hb.node_id(b.0)])
-            || !overlap(&a.1, &b.1, self.pad)
-        {
+        if !self.meets(&a, &b) {
             return;
         }
-        let (size_a, size_b) = (size(ha, a.0), size(hb, b.0));
-        // Split the larger side, `a` on ties. A leaf covers one face and an internal node at
-        // least two, so when the larger side is a leaf both are.
-        let (x, y) = if size_a >= size_b
-            && let Some([a0, a1]) = children(ha, a.0)
-        {
-            ((a0, b), (a1, b))
-        } else if let Some([b0, b1]) = children(hb, b.0) {
-            ((a, b0), (a, b1))
-        } else {
+        let (halves, size_a, size_b) = self.split(a, b);
+        let Some([x, y]) = halves else {
             return (self.visit)(a.0 & !LEAF, b.0 & !LEAF, out);
         };
         if size_a.min(size_b) >= GRAIN / 4 && size_a.max(size_b) >= GRAIN {
@@ -163,8 +179,34 @@ impl<V: Sync> Walk<'_, V> {
             out.append(&mut first);
             out.append(&mut second);
         } else {
-            self.cross(x.0, x.1, out);
-            self.cross(y.0, y.1, out);
+            let mut pending = Pending::new();
+            for pair in [y, x] {
+                if self.meets(&pair.0, &pair.1) {
+                    pending.push(pair);
+                }
+            }
+            self.cross_serial(&mut pending, out);
+        }
+    }
+
+    /// Crosses the node pairs of `pending`, which meet, on this thread, in the order the
+    /// recursion of [`Self::cross`] takes (depth first, the first half first): a loop over a
+    /// stack of the pairs whose boxes overlap, rather than a call for every pair of children.
+    fn cross_serial<T>(&self, pending: &mut Pending, out: &mut Vec<T>)
+    where
+        V: Fn(u32, u32, &mut Vec<T>),
+    {
+        while let Some((a, b)) = pending.pop() {
+            match self.split(a, b).0 {
+                None => (self.visit)(a.0 & !LEAF, b.0 & !LEAF, out),
+                Some([x, y]) => {
+                    for pair in [y, x] {
+                        if self.meets(&pair.0, &pair.1) {
+                            pending.push(pair);
+                        }
+                    }
+                }
+            }
         }
     }
 }
@@ -176,30 +218,26 @@ struct SelfWalk<'a, V> {
 }
 
 impl<V: Sync> SelfWalk<'_, V> {
+    /// Whether the node `id` is left out: nothing below it moved in a walk of what moved, or
+    /// the normal cones clear it.
+    fn skipped(&self, id: usize) -> bool {
+        self.walk.dirty.is_some_and(|d| !d[id])
+            || self
+                .cones
+                .is_some_and(|c| c.cannot_self_collide(self.walk.ha, id as u32))
+    }
+
     /// The pairs within the node that the reference `node` names.
     fn node<T: Send>(&self, node: u32, out: &mut Vec<T>)
     where
         V: Fn(u32, u32, &mut Vec<T>),
     {
         let h = self.walk.ha;
-        let id = h.node_id(node);
-        if self.walk.dirty.is_some_and(|d| !d[id])
-            || self
-                .cones
-                .is_some_and(|c| c.cannot_self_collide(h, id as u32))
-        {
-            return;
-        }
-        let Some([a, b]) = children(h, node) else {
-            if self.same_leaf {
-                (self.walk.visit)(id as u32, id as u32, out);
-            }
-            return;
+        let large = (size(h, node) >= GRAIN).then(|| children(h, node));
+        let Some(Some([a, b])) = large else {
+            return self.node_serial(node, &mut Pending::new(), out);
         };
-        if size(h, node) < GRAIN {
-            self.node(a.0, out);
-            self.node(b.0, out);
-            self.walk.cross(a, b, out);
+        if self.skipped(h.node_id(node)) {
             return;
         }
         let (mut left, (mut right, mut across)) = rayon::join(
@@ -214,5 +252,30 @@ impl<V: Sync> SelfWalk<'_, V> {
         out.append(&mut left);
         out.append(&mut right);
         out.append(&mut across);
+    }
+
+    /// [`Self::node`] on this thread, for a node below [`GRAIN`] faces; `pending` is the empty
+    /// stack its crossings share.
+    fn node_serial<T>(&self, node: u32, pending: &mut Pending, out: &mut Vec<T>)
+    where
+        V: Fn(u32, u32, &mut Vec<T>),
+    {
+        let h = self.walk.ha;
+        let id = h.node_id(node);
+        if self.skipped(id) {
+            return;
+        }
+        let Some([a, b]) = children(h, node) else {
+            if self.same_leaf {
+                (self.walk.visit)(id as u32, id as u32, out);
+            }
+            return;
+        };
+        self.node_serial(a.0, pending, out);
+        self.node_serial(b.0, pending, out);
+        if self.walk.meets(&a, &b) {
+            pending.push((a, b));
+            self.walk.cross_serial(pending, out);
+        }
     }
 }
