@@ -15,7 +15,11 @@
 //! `(b - a) × (c - a) = a × b + b × c + c × a`, the terms of edges shared by two faces cancel,
 //! so it is `Σ p × q` over the directed boundary edges `p → q` (Stokes' theorem for the
 //! vector area), taken relative to a boundary vertex to keep its digits. Any direction would be
-//! sound, since every triangle is then checked against it. The test runs lazily, top-down, on
+//! sound, since every triangle is then checked against it: over a step the axis is the vector
+//! area of the superface at the step's middle, `Σ (p0 + p1) × (q0 + q1)`, one cross product a
+//! boundary edge, where the sum of the normals' three Bernstein coefficients (below) took
+//! four; the two differ only in how much the middle coefficient counts. The same pass sums the
+//! boundary's vertices for the contour's centre. The test runs lazily, top-down, on
 //! the nodes the traversal visits: a smooth sheet is cleared by one linear pass at the root,
 //! and a node that fails usually fails on its first few triangles, or before any of them on
 //! its contour, which is checked first because it is shorter.
@@ -95,24 +99,36 @@ impl NormalCones {
         each(e0.cross(g0)) && each((e0.cross(g1) + e1.cross(g0)) / 2.0) && each(e1.cross(g1))
     }
 
-    /// The sum of the normal coefficients of the triangles of a superface, from its `boundary`
-    /// chain (see the module docs): `Σ p × q` at the start and at the end, and the Bernstein
-    /// middle term `Σ (p0 × q1 + p1 × q0) / 2` of a swept refit, relative to the first boundary
-    /// vertex.
-    fn boundary_axis(&self, h: &Hierarchy, boundary: &[[u32; 2]]) -> DVec3 {
+    /// The axis a superface's normals are tested against, from its `boundary` chain (see the
+    /// module docs): its vector area `Σ p × q` at the start for a static refit, and for a swept
+    /// one at the middle of the step, `Σ (p0 + p1) × (q0 + q1)` (the sum of the Bernstein
+    /// coefficients of its normals with the middle one counted twice: one cross product an
+    /// edge rather than four), relative to the first boundary vertex. Also the sums of the
+    /// boundary's vertices at the start and at the end, for the contour's centre.
+    fn boundary_axis(&self, h: &Hierarchy, boundary: &[[u32; 2]]) -> (DVec3, [DVec3; 2]) {
         let Some(&[origin, _]) = boundary.first() else {
-            return DVec3::ZERO;
+            return (DVec3::ZERO, [DVec3::ZERO; 2]);
         };
-        let rel = |x: &[DVec3], v: u32| x[v as usize] - x[origin as usize];
         let (start, end) = (&h.start[..], h.end());
-        boundary.iter().fold(DVec3::ZERO, |sum, &[p, q]| {
-            let (p0, q0) = (rel(start, p), rel(start, q));
-            if !self.swept {
-                return sum + p0.cross(q0);
-            }
-            let (p1, q1) = (rel(end, p), rel(end, q));
-            sum + p0.cross(q0) + (p0.cross(q1) + p1.cross(q0)) / 2.0 + p1.cross(q1)
-        })
+        let o = origin as usize;
+        if !self.swept {
+            return boundary.iter().fold(
+                (DVec3::ZERO, [DVec3::ZERO; 2]),
+                |(axis, [s0, s1]), &[p, q]| {
+                    let (p, q) = (start[p as usize], start[q as usize]);
+                    let (rp, rq) = (p - start[o], q - start[o]);
+                    (axis + rp.cross(rq), [s0 + p, s1 + p])
+                },
+            );
+        }
+        let middle = |p: u32| start[p as usize] + end[p as usize] - (start[o] + end[o]);
+        boundary.iter().fold(
+            (DVec3::ZERO, [DVec3::ZERO; 2]),
+            |(axis, [s0, s1]), &[p, q]| {
+                let sums = [s0 + start[p as usize], s1 + end[p as usize]];
+                (axis + middle(p).cross(middle(q)), sums)
+            },
+        )
     }
 
     /// Whether no two features below `node` can touch during the step (see the module docs).
@@ -132,7 +148,7 @@ impl NormalCones {
         boundary: &[[u32; 2]],
         slot: usize,
     ) -> bool {
-        let axis = self.boundary_axis(h, boundary);
+        let (axis, sums) = self.boundary_axis(h, boundary);
         let (axis_len2, cos2) = (axis.length_squared(), (MARGIN).sin().powi(2));
         let front = |n: &DVec3| {
             let d = n.dot(axis);
@@ -167,7 +183,7 @@ impl NormalCones {
         };
         // The contour costs a pass over the boundary, the normals one over the faces: the
         // cheaper test goes first.
-        if !contour_does_not_fold(h, boundary, axis.normalize()) {
+        if !contour_does_not_fold(h, boundary, axis.normalize(), sums) {
             return false;
         }
         match unseen() {
@@ -330,20 +346,20 @@ fn star_boundary(
 const CHUNK: usize = 8192;
 
 /// Whether the `boundary` chain, projected along `axis`, winds exactly once around its moving
-/// centroid with every edge turning forward at every time of the step.
-fn contour_does_not_fold(h: &Hierarchy, boundary: &[[u32; 2]], axis: DVec3) -> bool {
+/// centroid with every edge turning forward at every time of the step; `sums` are its
+/// vertices' sums at the start and at the end (see [`NormalCones::boundary_axis`]).
+fn contour_does_not_fold(
+    h: &Hierarchy,
+    boundary: &[[u32; 2]],
+    axis: DVec3,
+    sums: [DVec3; 2],
+) -> bool {
     if boundary.is_empty() {
         return false;
     }
     let (u, w) = axis.any_orthonormal_pair();
     let flat = |p: DVec3| [p.dot(u), p.dot(w)];
-    let centre = |positions: &[DVec3]| {
-        let sum = boundary
-            .iter()
-            .fold(DVec3::ZERO, |s, e| s + positions[e[0] as usize]);
-        flat(sum / boundary.len() as f64)
-    };
-    let (c0, c1) = (centre(&h.start), centre(h.end()));
+    let [c0, c1] = sums.map(|sum| flat(sum / boundary.len() as f64));
     let rel = |p: DVec3, c: [f64; 2]| {
         let q = flat(p);
         [q[0] - c[0], q[1] - c[1]]
