@@ -368,17 +368,20 @@ fn contour_does_not_fold(
     // Every edge turns forward by less than half a turn, so the curve winds once when it
     // passes the ray from the centre along the first axis once: an edge passes it exactly
     // when it goes from below that axis to on or above it.
+    // After a static refit the end is the start, and its turn is the only one.
+    let swept = h.is_swept();
     let mut passes = 0;
     for &[p, q] in boundary {
         let (p0, q0) = (rel(h.start[p as usize], c0), rel(h.start[q as usize], c0));
-        let (p1, q1) = (rel(h.end()[p as usize], c1), rel(h.end()[q as usize], c1));
-        let turns = [
-            cross(p0, q0),
-            (cross(p0, q1) + cross(p1, q0)) / 2.0,
-            cross(p1, q1),
-        ];
-        if turns.iter().any(|&k| k <= 0.0) {
+        if cross(p0, q0) <= 0.0 {
             return false;
+        }
+        if swept {
+            let (p1, q1) = (rel(h.end()[p as usize], c1), rel(h.end()[q as usize], c1));
+            let later = [(cross(p0, q1) + cross(p1, q0)) / 2.0, cross(p1, q1)];
+            if later.iter().any(|&k| k <= 0.0) {
+                return false;
+            }
         }
         passes += usize::from(p0[1] < 0.0 && q0[1] >= 0.0);
     }
