@@ -112,14 +112,14 @@ impl NormalCones {
         let (start, end) = (&h.start[..], h.end());
         let o = origin as usize;
         if !self.swept {
-            return boundary.iter().fold(
-                (DVec3::ZERO, [DVec3::ZERO; 2]),
-                |(axis, [s0, s1]), &[p, q]| {
-                    let (p, q) = (start[p as usize], start[q as usize]);
-                    let (rp, rq) = (p - start[o], q - start[o]);
-                    (axis + rp.cross(rq), [s0 + p, s1 + p])
-                },
-            );
+            let (axis, sum) =
+                boundary
+                    .iter()
+                    .fold((DVec3::ZERO, DVec3::ZERO), |(axis, sum), &[p, q]| {
+                        let (p, q) = (start[p as usize], start[q as usize]);
+                        (axis + (p - start[o]).cross(q - start[o]), sum + p)
+                    });
+            return (axis, [sum; 2]);
         }
         let middle = |p: u32| start[p as usize] + end[p as usize] - (start[o] + end[o]);
         boundary.iter().fold(
@@ -365,11 +365,11 @@ fn contour_does_not_fold(
         [q[0] - c[0], q[1] - c[1]]
     };
     let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
+    // After a static refit the end is the start, and its turn is the only one.
+    let swept = h.is_swept();
     // Every edge turns forward by less than half a turn, so the curve winds once when it
     // passes the ray from the centre along the first axis once: an edge passes it exactly
     // when it goes from below that axis to on or above it.
-    // After a static refit the end is the start, and its turn is the only one.
-    let swept = h.is_swept();
     let mut passes = 0;
     for &[p, q] in boundary {
         let (p0, q0) = (rel(h.start[p as usize], c0), rel(h.start[q as usize], c0));

@@ -128,7 +128,7 @@ fn children(h: &Hierarchy, node: u32) -> Option<[Boxed; 2]> {
     })
 }
 
-/// Node pairs still to cross on one thread, nearest last (see [`Walk::cross_serial`]).
+/// Node pairs still to cross on one thread, the next one last (see [`Walk::cross_serial`]).
 type Pending = Vec<(Boxed, Boxed)>;
 
 impl<V: Sync> Walk<'_, V> {
@@ -167,31 +167,24 @@ impl<V: Sync> Walk<'_, V> {
         if !self.meets(&a, &b) {
             return;
         }
-        let (halves, size_a, size_b) = self.split(a, b);
-        let Some([x, y]) = halves else {
-            return (self.visit)(a.0 & !LEAF, b.0 & !LEAF, out);
-        };
-        if size_a.min(size_b) >= GRAIN / 4 && size_a.max(size_b) >= GRAIN {
-            let (mut first, mut second) = rayon::join(
-                || collect(|o| self.cross(x.0, x.1, o)),
-                || collect(|o| self.cross(y.0, y.1, o)),
-            );
-            out.append(&mut first);
-            out.append(&mut second);
-        } else {
-            let mut pending = Pending::new();
-            for pair in [y, x] {
-                if self.meets(&pair.0, &pair.1) {
-                    pending.push(pair);
-                }
+        match self.split(a, b) {
+            (Some([x, y]), size_a, size_b)
+                if size_a.min(size_b) >= GRAIN / 4 && size_a.max(size_b) >= GRAIN =>
+            {
+                let (mut first, mut second) = rayon::join(
+                    || collect(|o| self.cross(x.0, x.1, o)),
+                    || collect(|o| self.cross(y.0, y.1, o)),
+                );
+                out.append(&mut first);
+                out.append(&mut second);
             }
-            self.cross_serial(&mut pending, out);
+            _ => self.cross_serial(&mut vec![(a, b)], out),
         }
     }
 
-    /// Crosses the node pairs of `pending`, which meet, on this thread, in the order the
-    /// recursion of [`Self::cross`] takes (depth first, the first half first): a loop over a
-    /// stack of the pairs whose boxes overlap, rather than a call for every pair of children.
+    /// Crosses the node pairs of `pending`, which meet, on this thread, depth first and the
+    /// first half first, as a recursion would: a loop over a stack of the pairs whose boxes
+    /// overlap, rather than a call for every pair of children.
     fn cross_serial<T>(&self, pending: &mut Pending, out: &mut Vec<T>)
     where
         V: Fn(u32, u32, &mut Vec<T>),
