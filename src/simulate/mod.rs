@@ -266,15 +266,6 @@ fn simulate(args: &Args) -> Result<Outcome> {
             dir.display()
         );
     }
-    if next == 0 {
-        let earlier = outputs::remove_earlier(&dir)?;
-        if earlier > 0 && !args.quiet {
-            eprintln!(
-                "note: removed {earlier} file(s) of an earlier run from {}",
-                dir.display()
-            );
-        }
-    }
     interrupt::watch()?;
     if next > 0 {
         shot.pose_body(next - 1);
@@ -284,6 +275,9 @@ fn simulate(args: &Args) -> Result<Outcome> {
         args.quiet || next > last,
     );
     let mut output = Output::new(&scene, &dir, first, stats, cloth, control_surface, body);
+    // A run from frame 0 writes every file afresh: the output removes an earlier run's before
+    // its first frame, beside the simulation (see `Output::earlier`).
+    output.earlier = (next == 0).then_some(Earlier { quiet: args.quiet });
     let mut simulate = |deliver: &mut dyn FnMut(Simulated) -> bool| {
         run_frames(&mut shot, &mut state, next..=last, args, &progress, deliver)
     };
@@ -641,6 +635,15 @@ struct Output<'a> {
     /// The check's clearances of the frame before.
     clearances: Clearances,
     stats: Vec<FrameStats>,
+    /// Whether an earlier run's files are still to be removed from `dir`, which the first
+    /// frame does before writing anything ([`outputs::remove_earlier`]): on the output's
+    /// thread, beside the simulation (`docs/DESIGN.md`).
+    earlier: Option<Earlier>,
+}
+
+/// An earlier run's files to remove before the first frame, and whether to say so.
+struct Earlier {
+    quiet: bool,
 }
 
 impl<'a> Output<'a> {
@@ -670,10 +673,12 @@ impl<'a> Output<'a> {
             body,
             clearances: Clearances::default(),
             stats,
+            earlier: None,
         }
     }
 
-    /// Checks a simulated frame, writes its files and then its checkpoint.
+    /// Checks a simulated frame, writes its files and then its checkpoint; the first frame of
+    /// a run from frame 0 removes an earlier run's files before.
     fn frame(&mut self, done: Simulated) -> Result<()> {
         let Simulated {
             mut row,
@@ -682,6 +687,15 @@ impl<'a> Output<'a> {
             body,
         } = done;
         let frame = row.frame;
+        if let Some(Earlier { quiet }) = self.earlier.take() {
+            let removed = outputs::remove_earlier(self.dir)?;
+            if removed > 0 && !quiet {
+                eprintln!(
+                    "note: removed {removed} file(s) of an earlier run from {}",
+                    self.dir.display()
+                );
+            }
+        }
         let precision = self.scene.output.precision;
         self.cloth
             .set(self.cloth.refine(&state.positions), precision)?;
