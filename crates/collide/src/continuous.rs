@@ -14,7 +14,9 @@
 
 use parry3d_f64::math::Vector as DVec3;
 
-use crate::ccd::{apart_boxes, edge_edge_unboxed, swept, vertex_triangle_unboxed};
+use crate::ccd::{
+    Path, apart_boxes, edge_edge_unboxed, faces_apart, swept, vertex_triangle_unboxed,
+};
 use crate::cones::{NormalCones, Stars};
 use crate::hierarchy::Hierarchy;
 use crate::traverse::{cross_pairs, self_pairs};
@@ -143,7 +145,7 @@ impl Hierarchy {
         let stars = Stars::new(self, &cones);
         let visit = |a: u32, b: u32, out: &mut Vec<Found>| {
             let (f, g) = (a.min(b), a.max(b));
-            if f != g && stars.part(f, g) {
+            if f != g && (stars.part(f, g) || self.faces_stay_apart(f, g)) {
                 return;
             }
             vertices_against_face(self, f, self, g, true, Found::VertexTriangle, out);
@@ -197,7 +199,26 @@ impl Hierarchy {
 }
 
 /// The path of vertex `v` of `h` over the step: `[start, end]`.
-fn path(h: &Hierarchy, v: u32) -> [DVec3; 2] {
+impl Hierarchy {
+    /// Whether faces `f` and `g`, sharing no corner, stay apart over the step
+    /// ([`faces_apart`]); faces of more than [`FACE_CORNERS`] corners are left to the tests.
+    fn faces_stay_apart(&self, f: u32, g: u32) -> bool {
+        let (a, b) = (self.topology.face(f), self.topology.face(g));
+        if a.len() > FACE_CORNERS || b.len() > FACE_CORNERS || a.iter().any(|v| b.contains(v)) {
+            return false;
+        }
+        let mut corners = [[DVec3::ZERO; 2]; 2 * FACE_CORNERS];
+        for (slot, &v) in corners.iter_mut().zip(a.iter().chain(b)) {
+            *slot = path(self, v);
+        }
+        faces_apart(&corners[..a.len()], &corners[a.len()..a.len() + b.len()])
+    }
+}
+
+/// Most corners of a face [`Hierarchy::faces_stay_apart`] looks at.
+const FACE_CORNERS: usize = 8;
+
+fn path(h: &Hierarchy, v: u32) -> Path {
     [h.start[v as usize], h.end()[v as usize]]
 }
 
