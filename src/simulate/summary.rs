@@ -29,7 +29,8 @@ pub fn report(
     failures: &[Failure],
 ) -> Result<String> {
     let stepped: Vec<&FrameStats> = stats.iter().filter(|s| s.frame > 0).collect();
-    let total_ms: f64 = stepped.iter().map(|s| s.ms).sum();
+    // From +0, not `sum()`'s −0, so that a run of no steps took 0.0 s, not −0.0 s.
+    let total_ms = stepped.iter().fold(0.0, |total, s| total + s.ms);
     let mean_ms = total_ms / stepped.len().max(1) as f64;
     let worst = stats
         .iter()
@@ -95,4 +96,28 @@ pub fn report(
         stats.len(),
         path.display()
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run that only writes its rest pose (`--frames 0` or `[scene] frames = 0`) says it
+    /// took 0.0 s, not the −0.0 s of an empty floating-point sum.
+    #[test]
+    fn a_run_of_no_steps_took_no_time() {
+        let dir = std::env::temp_dir().join(format!("tailor-summary-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let rest = [FrameStats::default()];
+        let text = report(Path::new("scene.toml"), &dir, 0.005, &rest, &[]).unwrap();
+        assert!(
+            text.starts_with("scene.toml: 0 frames simulated in 0.0 s (0 ms per frame)\n"),
+            "{text}"
+        );
+        let written: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(FILE)).unwrap()).unwrap();
+        let total = written["total"]["ms"].as_f64().unwrap();
+        assert!(total == 0.0 && total.is_sign_positive(), "{total}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
