@@ -224,22 +224,28 @@ fn reach(lo: DVec3, hi: DVec3) -> f64 {
 /// of its components; the dot products round by a few units in the last place of the largest
 /// coordinate times that sum, and 64 more of them are allowed.
 fn apart_along<const N: usize>(paths: &[Path; N], split: usize, direction: DVec3) -> bool {
+    let (first, second) = paths.split_at(split);
+    separated(first, second, slack(paths), direction)
+}
+
+/// How far apart two sets of `paths` must be along a unit axis for the exact tests never to
+/// call any two of their points touching, rounding included (see [`apart_along`]).
+fn slack(paths: &[Path]) -> f64 {
     let points = paths.iter().flatten();
     let lo = points.clone().fold(DVec3::INFINITY, |m, &x| m.min(x));
     let hi = points.fold(DVec3::NEG_INFINITY, |m, &x| m.max(x));
     let magnitude = lo.abs().max(hi.abs()).max_element();
-    let scale = direction.abs().element_sum();
-    let needed = (reach(lo, hi) + 64.0 * f64::EPSILON * magnitude) * scale;
+    reach(lo, hi) + 64.0 * f64::EPSILON * magnitude
+}
+
+/// Whether `direction` separates the points of `first` from those of `second` by more than
+/// `slack` (from [`slack`] of them all) times its length, at the start and at the end.
+fn separated(first: &[Path], second: &[Path], slack: f64, direction: DVec3) -> bool {
+    let needed = slack * direction.abs().element_sum();
     (0..2).all(|t| {
         let along = |p: &Path| p[t].dot(direction);
-        let near = paths[..split]
-            .iter()
-            .map(along)
-            .fold(f64::NEG_INFINITY, f64::max);
-        let far = paths[split..]
-            .iter()
-            .map(along)
-            .fold(f64::INFINITY, f64::min);
+        let near = first.iter().map(along).fold(f64::NEG_INFINITY, f64::max);
+        let far = second.iter().map(along).fold(f64::INFINITY, f64::min);
         far - near > needed
     })
 }
@@ -250,13 +256,11 @@ fn apart_along<const N: usize>(paths: &[Path; N], split: usize, direction: DVec3
 /// start or along either face's normal there (hence throughout, as in [`apart_along`]). Every
 /// vertex–triangle and edge–edge pair of the two faces then has no contact, so a caller may
 /// skip them all at once: rolling layers of a fold lie apart along their normals, neighbours
-/// across a corner of a smooth sheet along the line between them.
-pub(crate) fn faces_apart(first: &[Path], second: &[Path]) -> bool {
-    let points = first.iter().chain(second).flatten();
-    let lo = points.clone().fold(DVec3::INFINITY, |m, &x| m.min(x));
-    let hi = points.fold(DVec3::NEG_INFINITY, |m, &x| m.max(x));
-    let magnitude = lo.abs().max(hi.abs()).max_element();
-    let slack = reach(lo, hi) + 64.0 * f64::EPSILON * magnitude;
+/// across a corner of a smooth sheet along the line between them. `corners` holds the first
+/// face's corners and then the second's, `split` of them the first's.
+pub(crate) fn faces_apart(corners: &[Path], split: usize) -> bool {
+    let (first, second) = corners.split_at(split);
+    let slack = slack(corners);
     let centroid =
         |paths: &[Path]| paths.iter().fold(DVec3::ZERO, |sum, p| sum + p[0]) / paths.len() as f64;
     // The vector area of a polygon at the start, relative to its first corner to keep its
@@ -269,15 +273,7 @@ pub(crate) fn faces_apart(first: &[Path], second: &[Path]) -> bool {
     };
     let between = centroid(second) - centroid(first);
     let toward = |d: DVec3| if d.dot(between) < 0.0 { -d } else { d };
-    let separates = |direction: DVec3| {
-        let needed = slack * direction.abs().element_sum();
-        (0..2).all(|t| {
-            let along = |p: &Path| p[t].dot(direction);
-            let near = first.iter().map(along).fold(f64::NEG_INFINITY, f64::max);
-            let far = second.iter().map(along).fold(f64::INFINITY, f64::min);
-            far - near > needed
-        })
-    };
+    let separates = |direction: DVec3| separated(first, second, slack, direction);
     separates(between) || separates(toward(normal(first))) || separates(toward(normal(second)))
 }
 
@@ -925,7 +921,7 @@ mod tests {
                 }
             }
             hits += usize::from(found);
-            if faces_apart(&first, &second) {
+            if faces_apart(&[first, second].concat(), first.len()) {
                 parted += 1;
                 assert!(!found, "{first:?} {second:?}");
             }

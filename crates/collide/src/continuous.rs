@@ -157,6 +157,23 @@ impl Hierarchy {
         self_pairs(self, Some(&cones), true, 0.0, dirty, &visit)
     }
 
+    /// Whether faces `f` and `g`, sharing no corner, stay apart over the step
+    /// ([`faces_apart`]); faces of more than [`FACE_CORNERS`] corners are left to the tests.
+    fn faces_stay_apart(&self, f: u32, g: u32) -> bool {
+        let (a, b) = (self.topology.face(f), self.topology.face(g));
+        if a.len() > FACE_CORNERS
+            || b.len() > FACE_CORNERS
+            || self.topology.faces_share_vertex(f, g)
+        {
+            return false;
+        }
+        let mut corners = [[DVec3::ZERO; 2]; 2 * FACE_CORNERS];
+        for (slot, &v) in corners.iter_mut().zip(a.iter().chain(b)) {
+            *slot = path(self, v);
+        }
+        faces_apart(&corners[..a.len() + b.len()], a.len())
+    }
+
     /// Every vertex–triangle and edge–edge contact between this mesh and `other` during the
     /// motions of their last swept refits.
     #[must_use]
@@ -198,26 +215,10 @@ impl Hierarchy {
     }
 }
 
-/// The path of vertex `v` of `h` over the step: `[start, end]`.
-impl Hierarchy {
-    /// Whether faces `f` and `g`, sharing no corner, stay apart over the step
-    /// ([`faces_apart`]); faces of more than [`FACE_CORNERS`] corners are left to the tests.
-    fn faces_stay_apart(&self, f: u32, g: u32) -> bool {
-        let (a, b) = (self.topology.face(f), self.topology.face(g));
-        if a.len() > FACE_CORNERS || b.len() > FACE_CORNERS || a.iter().any(|v| b.contains(v)) {
-            return false;
-        }
-        let mut corners = [[DVec3::ZERO; 2]; 2 * FACE_CORNERS];
-        for (slot, &v) in corners.iter_mut().zip(a.iter().chain(b)) {
-            *slot = path(self, v);
-        }
-        faces_apart(&corners[..a.len()], &corners[a.len()..a.len() + b.len()])
-    }
-}
-
 /// Most corners of a face [`Hierarchy::faces_stay_apart`] looks at.
 const FACE_CORNERS: usize = 8;
 
+/// The path of vertex `v` of `h` over the step: `[start, end]`.
 fn path(h: &Hierarchy, v: u32) -> Path {
     [h.start[v as usize], h.end()[v as usize]]
 }
