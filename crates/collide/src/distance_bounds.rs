@@ -61,8 +61,7 @@ impl DistanceBounds {
                 mesh_same &= same_bits(p, &q);
                 *p = q;
             }
-            // Past `distance` by more than rounding could take back.
-            let clear = distance + 1e-9 * (1.0 + distance.abs());
+            let clear = clear_of(distance);
             for (i, ((bound, p), q)) in self
                 .bound
                 .iter_mut()
@@ -102,12 +101,25 @@ impl DistanceBounds {
         self.bound[i as usize] = bound;
     }
 
+    /// Whether point `i`'s bound is past `distance` by more than rounding could take back, as
+    /// of the last [`DistanceBounds::stale`]: the point is then farther than `distance` from
+    /// the mesh.
+    #[must_use]
+    pub fn past(&self, i: u32, distance: f64) -> bool {
+        self.bound[i as usize] > clear_of(distance)
+    }
+
     /// Each point's bound: what [`DistanceBounds::set`] gave it, lowered by the motions since
     /// (negative infinity for a listed point not yet given one).
     #[must_use]
     pub fn bounds(&self) -> &[f64] {
         &self.bound
     }
+}
+
+/// `distance` with the margin a bound must pass it by: more than rounding could take back.
+fn clear_of(distance: f64) -> f64 {
+    distance + 1e-9 * (1.0 + distance.abs())
 }
 
 /// Whether two points are the same bits: a query answered at one is answered at the other.

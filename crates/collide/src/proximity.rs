@@ -245,6 +245,46 @@ impl Hierarchy {
         Ok(())
     }
 
+    /// [`Hierarchy::closest_points_into`] with a face near each query, `seeds[i]` for
+    /// `queries[i]` (the face of its last answer, for points that moved little since), tried
+    /// first in place of the previous query's: the walk then starts with a radius about the
+    /// answer's. The answers are the same bits with any seeds, or none (see
+    /// [`Hierarchy::nearest`]).
+    ///
+    /// # Errors
+    /// As [`Hierarchy::closest_points`]; `out` is then left unchanged.
+    ///
+    /// # Panics
+    /// When `seeds` and `queries` differ in length, or a seed is not a face of the mesh.
+    pub fn closest_points_seeded_into(
+        &self,
+        queries: &[Point],
+        max_distance: f64,
+        seeds: &[Option<u32>],
+        out: &mut Vec<Option<Closest>>,
+    ) -> Result<(), CollideError> {
+        assert_eq!(seeds.len(), queries.len(), "a seed per query");
+        assert!(
+            seeds
+                .iter()
+                .flatten()
+                .all(|&f| (f as usize) < self.face_count()),
+            "seeds are faces of the mesh"
+        );
+        check_distance("max_distance", max_distance)?;
+        check_queries(queries)?;
+        queries
+            .par_iter()
+            .zip(seeds)
+            .with_min_len(QUERY_RUN)
+            .map_init(Scratch::default, |scratch, (q, &seed)| {
+                scratch.seed = seed.or(scratch.seed);
+                self.nearest(to_glam(q), max_distance, scratch)
+            })
+            .collect_into_vec(out);
+        Ok(())
+    }
+
     /// For each query point, every face with a point within `distance`.
     ///
     /// # Errors

@@ -110,6 +110,34 @@ fn closest_points_match_brute_force() {
     }
 }
 
+/// A seed per query, whichever face it names (the true answer's, a far one, or none), leaves
+/// every answer the same bits as the unseeded queries, which match brute force above.
+#[test]
+fn seeded_closest_points_are_the_unseeded_ones() {
+    let mut rng = Rng::new(5);
+    for (name, m) in meshes() {
+        let h = build(&m);
+        let faces = h.face_count() as u32;
+        let queries: Vec<Point> = (0..60).map(|_| rng.point(1.5)).collect();
+        for d in [0.1, 0.4, f64::INFINITY] {
+            let want = h.closest_points(&queries, d).unwrap();
+            let seeds: Vec<Option<u32>> = want
+                .iter()
+                .enumerate()
+                .map(|(i, c)| match i % 3 {
+                    0 => c.map(|c| c.face),
+                    1 => Some((i as u32 * 7919) % faces),
+                    _ => None,
+                })
+                .collect();
+            let mut got = Vec::new();
+            h.closest_points_seeded_into(&queries, d, &seeds, &mut got)
+                .unwrap();
+            assert_eq!(got, want, "{name}: within {d}");
+        }
+    }
+}
+
 /// Over a moving mesh and moving points, every point the bounds do not list for measuring is
 /// farther than the distance asked about (brute force), except the points that did not move
 /// over a mesh that did not move, which are never listed (their last answer holds); and the
@@ -149,6 +177,12 @@ fn distance_bounds_list_every_point_that_may_have_come_near() {
                     .iter()
                     .map(|x| x.0)
                     .fold(f64::INFINITY, f64::min);
+                if bounds.past(i as u32, near) {
+                    assert!(
+                        d > near,
+                        "{name}: step {step}, point {i} at {d} past {near}"
+                    );
+                }
                 if listed.binary_search(&(i as u32)).is_ok() {
                     bounds.set(i as u32, d.min(reach));
                 } else if !(still(i) && mesh_still) {

@@ -11,7 +11,7 @@
 //! ([`Hierarchy::impacts_with`]), so a vertex cannot cross a body face between two substeps
 //! however fast either moves (Bridson, Fedkiw & Anderson 2002, §6).
 
-use tailor_collide::{Closest, CollideError, Hierarchy, VertexTriangleImpact};
+use tailor_collide::{Closest, CollideError, DistanceBounds, Hierarchy, VertexTriangleImpact};
 use tailor_subdiv::Point;
 
 use crate::ClothError;
@@ -57,6 +57,14 @@ pub(crate) struct Obstacle {
     /// The closest body point of each vertex at the start of the substep, within the reach
     /// of [`Self::find_contacts`].
     closest: Vec<Option<Closest>>,
+    /// Lower bounds of those vertices' distances from the body, and the buffers of the
+    /// vertices [`Self::find_contacts`] measures again (see [`Self::measure_start`]).
+    bounds: DistanceBounds,
+    stale: Vec<u32>,
+    measured: Vec<u32>,
+    measured_points: Vec<Point>,
+    seeds: Vec<Option<u32>>,
+    answers: Vec<Option<Closest>>,
     /// Where the last continuous pass or projection of the substep left the cloth, outside
     /// the body, and the buffers of the projection's deeper look ([`Self::project`]).
     checked: Vec<Point>,
@@ -91,6 +99,12 @@ impl Obstacle {
             velocity: vec![Vec3::zeros(); n],
             impacts: Vec::new(),
             closest: Vec::new(),
+            bounds: DistanceBounds::default(),
+            stale: Vec::new(),
+            measured: Vec::new(),
+            measured_points: Vec::new(),
+            seeds: Vec::new(),
+            answers: Vec::new(),
             checked: Vec::new(),
             deep: Vec::new(),
             deep_points: Vec::new(),
@@ -190,8 +204,7 @@ impl Obstacle {
         let fastest = |v: &[Vec3]| v.iter().map(|v| v.norm()).fold(0.0, f64::max);
         let reach = h * (fastest(v0) + h * settings.gravity.norm() + fastest(&self.velocity));
         self.hierarchy.refit(&self.substep[0], 0.0)?;
-        self.hierarchy
-            .closest_points_into(x0, thickness + reach, &mut self.closest)?;
+        self.measure_start(x0, thickness + reach)?;
         for (i, c) in self.closest.iter().enumerate() {
             let Some(c) = c else {
                 lifted[i] = false;
@@ -215,6 +228,51 @@ impl Obstacle {
             if distance + h * closing < thickness {
                 out.push(contact(i, normal, distance, body, thickness, h));
             }
+        }
+        Ok(())
+    }
+
+    /// The closest body point within `limit` of each of the positions `x0` into
+    /// [`Self::closest`], the same bits as asking of them all
+    /// ([`Hierarchy::closest_points_into`]), at less cost: a vertex whose distance bound
+    /// ([`DistanceBounds`]: its last distance, or the radius nothing was found within, less
+    /// how far it and the body moved since) is past `limit` has none, and the others are asked
+    /// starting from the face of their last answer ([`Hierarchy::closest_points_seeded_into`]),
+    /// a few millimetres from the new one at most in a drape. On the 64² drape at one substep a
+    /// frame, two vertices in five hang farther from the sphere than the reach, and the seeded
+    /// walks take 10–20% less time.
+    fn measure_start(&mut self, x0: &[Point], limit: f64) -> Result<(), CollideError> {
+        let n = x0.len();
+        if self.closest.len() != n {
+            self.closest.clear();
+            self.closest.resize(n, None);
+            self.bounds.forget();
+        }
+        // Lowers every bound by the motions since the last call (the listed vertices are
+        // asked below like any whose bound is not past the limit).
+        self.bounds
+            .stale(&self.hierarchy, x0, limit, &mut self.stale);
+        self.measured.clear();
+        self.measured_points.clear();
+        self.seeds.clear();
+        for (i, c) in self.closest.iter_mut().enumerate() {
+            if self.bounds.past(i as u32, limit) {
+                *c = None;
+            } else {
+                self.measured.push(i as u32);
+                self.measured_points.push(x0[i]);
+                self.seeds.push(c.map(|c| c.face));
+            }
+        }
+        self.hierarchy.closest_points_seeded_into(
+            &self.measured_points,
+            limit,
+            &self.seeds,
+            &mut self.answers,
+        )?;
+        for (&i, answer) in self.measured.iter().zip(&self.answers) {
+            self.closest[i as usize] = *answer;
+            self.bounds.set(i, answer.map_or(limit, |c| c.distance));
         }
         Ok(())
     }
@@ -451,6 +509,45 @@ mod tests {
             floor.face_vertices(),
         )
         .expect("a box")
+    }
+
+    /// Over moving cloth points, a body that moves on some substeps and holds still on
+    /// others, and a reach that grows and shrinks, the closest points the contacts are found
+    /// from, measured again only where the distance bounds require and from last answers'
+    /// faces, are the same bits as asking of every point afresh; and the bounds spare some of
+    /// the asking.
+    #[test]
+    fn the_start_is_measured_as_asking_of_every_vertex() {
+        let sphere = crate::shapes::sphere(Point::origin(), 0.5, 8, 12);
+        let (offsets, vertices) = (sphere.face_offsets(), sphere.face_vertices());
+        let mut obstacle = Obstacle::new(sphere.positions(), offsets, vertices).expect("a sphere");
+        let mut rng = crate::testing::Rng::new(3);
+        let mut x0: Vec<Point> = (0..300).map(|_| Point::from(rng.vec3() * 0.8)).collect();
+        let (mut asked, mut offset) = (0, Vec3::zeros());
+        for step in 0..12u32 {
+            let before = offset;
+            if step % 3 != 1 {
+                offset += rng.vec3() * 0.01;
+            }
+            let at = |d: Vec3| sphere.positions().iter().map(|p| p + d).collect::<Vec<_>>();
+            let (t0, t1) = (f64::from(step), f64::from(step) + 1.0);
+            obstacle
+                .set_motion(t0, &at(before), t1, &at(offset))
+                .unwrap();
+            obstacle.begin_substep(t0, 1.0);
+            obstacle.hierarchy.refit(&obstacle.substep[0], 0.0).unwrap();
+            for (i, p) in x0.iter_mut().enumerate() {
+                if i % 4 != 0 || step % 2 == 0 {
+                    *p += rng.vec3() * 0.02;
+                }
+            }
+            let limit = [0.05, 0.2, 0.1][step as usize % 3];
+            obstacle.measure_start(&x0, limit).unwrap();
+            asked += obstacle.measured.len();
+            let want = obstacle.hierarchy.closest_points(&x0, limit).unwrap();
+            assert_eq!(obstacle.closest, want, "step {step}");
+        }
+        assert!(asked < 12 * x0.len(), "{asked} measured");
     }
 
     #[test]
