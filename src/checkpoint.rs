@@ -52,7 +52,7 @@ use tailor_cloth::{ContactState, Previous, State};
 use tailor_subdiv::Point;
 
 use crate::check::Findings;
-use crate::output::write_atomically;
+use crate::output::{remove_spare, write_exchanging};
 use crate::scene::Fingerprint;
 
 const MAGIC: &[u8; 8] = b"TAILORCK";
@@ -105,13 +105,22 @@ pub struct Checkpoint {
     pub stats: Vec<FrameStats>,
 }
 
-/// Writes `checkpoint` atomically into `dir`.
+/// Writes `checkpoint` atomically into `dir`, over the one before the last
+/// ([`write_exchanging`]); [`release`] removes that spare when the run is done.
 ///
 /// # Errors
 /// Any I/O error, naming the file.
 pub fn save(dir: &Path, checkpoint: &Checkpoint) -> Result<()> {
-    write_atomically(&path(dir), |w| encode(checkpoint, w))?;
+    write_exchanging(&path(dir), |w| encode(checkpoint, w))?;
     Ok(())
+}
+
+/// Removes the spare [`save`] keeps in `dir` between checkpoints.
+///
+/// # Errors
+/// When it exists and cannot be removed, naming it.
+pub fn release(dir: &Path) -> Result<()> {
+    remove_spare(&path(dir))
 }
 
 fn encode(c: &Checkpoint, w: &mut impl Write) -> io::Result<()> {

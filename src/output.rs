@@ -14,6 +14,17 @@
 //! disk; the checkpoint records each frame file's length and `--resume` refuses files that
 //! lost theirs (`crate::simulate`).
 //!
+//! A file written again and again under one name (the checkpoint, after every frame) can
+//! keep the file it replaces as its next temporary ([`write_exchanging`]): the temporary is
+//! written over, and then swapped with the destination in one step (Linux's `renameat2` with
+//! `RENAME_EXCHANGE`), so each write reuses the storage of the one two before it instead of
+//! the system freeing a file's pages and handing out new ones. On the 2-core host that is
+//! most of what writing a file costs: the 64² drape's checkpoints (440 KB after each of its
+//! 61 frames) took 53–58 ms of the output thread's time written afresh and 14 ms written
+//! over. Nothing else reads the temporary, so writing over it breaks no reader; the swap
+//! keeps the destination whole at every moment, as the rename does; and where the swap is
+//! not supported, the temporary is renamed over the destination as usual.
+//!
 //! Renaming over a path replaces whatever the path named, so the destination is looked at
 //! first. A symbolic link is followed (link after link) to the file it names, which is
 //! replaced atomically in its own directory; the link stays, as a user who linked
@@ -31,7 +42,7 @@
 //! `println!` panic.
 
 use std::fs::{self, File, OpenOptions};
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -81,6 +92,42 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 ) -> Result<u64> {
+    write_file(path, write, false)
+}
+
+/// [`write_atomically`] for a file written again and again: the file replaced becomes the
+/// temporary the next call writes over (see the module docs); [`remove_spare`] removes it
+/// when the writing is done.
+///
+/// # Errors
+/// As [`write_atomically`].
+pub fn write_exchanging(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+) -> Result<u64> {
+    write_file(path, write, true)
+}
+
+/// Removes the temporary [`write_exchanging`] keeps beside `path`, if there is one.
+///
+/// # Errors
+/// When it exists and cannot be removed, naming it.
+pub fn remove_spare(path: &Path) -> Result<()> {
+    let spare = temporary_path(&follow_links(path)?);
+    match fs::remove_file(&spare) {
+        Err(err) if err.kind() != io::ErrorKind::NotFound => {
+            Err(err).with_context(|| format!("removing {}", spare.display()))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// [`write_atomically`], keeping the replaced file as the next temporary when `exchange`.
+fn write_file(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+    exchange: bool,
+) -> Result<u64> {
     (|| -> io::Result<u64> {
         let target = follow_links(path)?;
         match fs::metadata(&target) {
@@ -90,25 +137,71 @@ pub fn write_atomically(
                 out.flush()?;
                 Ok(0)
             }
-            _ => replace(&target, write),
+            Ok(meta) => replace(&target, write, exchange && meta.is_file()),
+            Err(_) => replace(&target, write, false),
         }
     })()
     .with_context(|| format!("writing {}", path.display()))
 }
 
+/// The temporary at `tmp` opened to be written over from its start: only a regular file with
+/// no other name (as [`replace`] leaves it; a hard link elsewhere would see it change), else a
+/// new file in its place.
+fn spare(tmp: &Path) -> io::Result<File> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match fs::symlink_metadata(tmp) {
+            Ok(meta) if meta.is_file() && meta.nlink() == 1 => {
+                return OpenOptions::new().write(true).open(tmp);
+            }
+            Ok(_) => fs::remove_file(tmp)?,
+            Err(_) => {}
+        }
+    }
+    File::create(tmp)
+}
+
+/// Puts the file at `tmp` in place of the one at `path`, keeping that one at `tmp` where the
+/// system swaps two names in one step (Linux), else renaming `tmp` over `path`.
+fn swap(tmp: &Path, path: &Path) -> io::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::fs::{CWD, RenameFlags, renameat_with};
+        if renameat_with(CWD, tmp, CWD, path, RenameFlags::EXCHANGE).is_ok() {
+            return Ok(());
+        }
+    }
+    fs::rename(tmp, path)
+}
+
 /// Writes a temporary file beside `path` and renames it over `path`; returns its length. The
-/// temporary is removed on failure.
+/// temporary is removed on failure. With `exchange` (`path` then a regular file) the
+/// temporary is written over rather than made afresh, and swapped with `path` (see the
+/// module docs).
 fn replace(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+    exchange: bool,
 ) -> io::Result<u64> {
     let tmp = temporary_path(path);
     let result = (|| -> io::Result<u64> {
-        let mut out = BufWriter::new(File::create(&tmp)?);
+        let file = if exchange {
+            spare(&tmp)?
+        } else {
+            File::create(&tmp)?
+        };
+        let mut out = BufWriter::new(file);
         write(&mut out)?;
         out.flush()?;
-        let length = out.get_ref().metadata()?.len();
-        fs::rename(&tmp, path)?;
+        let file = out.get_mut();
+        let length = file.stream_position()?;
+        if exchange {
+            file.set_len(length)?;
+            swap(&tmp, path)?;
+        } else {
+            fs::rename(&tmp, path)?;
+        }
         Ok(length)
     })();
     if result.is_err() {
@@ -226,6 +319,43 @@ mod tests {
             1,
             "temporary file left behind"
         );
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A file written again and again keeps the one it replaced as its next temporary, and
+    /// writes over it: the destination holds each content whole, the temporary the one
+    /// before (on Linux, where the two are swapped), until it is removed; a temporary with
+    /// another name elsewhere (a hard link) is not written over.
+    #[test]
+    fn a_rewritten_file_writes_over_the_one_before_the_last() {
+        let dir = std::env::temp_dir().join(format!("tailor-exchange-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("state.bin");
+        let tmp = temporary_path(&path);
+        for (i, text) in ["first, longer", "second", "third text"].iter().enumerate() {
+            write_exchanging(&path, |w| w.write_all(text.as_bytes())).unwrap();
+            assert_eq!(fs::read_to_string(&path).unwrap(), *text);
+            if cfg!(target_os = "linux") && i > 0 {
+                let before = ["first, longer", "second"][i - 1];
+                assert_eq!(fs::read_to_string(&tmp).unwrap(), before, "write {i}");
+            }
+        }
+        #[cfg(target_os = "linux")]
+        {
+            let kept = dir.join("kept.bin");
+            fs::hard_link(&tmp, &kept).unwrap();
+            write_exchanging(&path, |w| w.write_all(b"fourth")).unwrap();
+            assert_eq!(fs::read_to_string(&path).unwrap(), "fourth");
+            assert_eq!(fs::read_to_string(&kept).unwrap(), "second");
+            fs::remove_file(&kept).unwrap();
+        }
+        remove_spare(&path).unwrap();
+        remove_spare(&path).unwrap();
+        let names: Vec<_> = fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, ["state.bin"]);
         fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -308,8 +308,11 @@ fn simulate(args: &Args) -> Result<Outcome> {
             simulate(&mut |done| output.frame(done).map_err(|err| failed = Some(err)).is_ok());
         (simulated, failed.map_or(Ok(output), Err))
     };
-    // The frames simulated are written (and checkpointed) before any error is told.
+    // The frames simulated are written (and checkpointed) before any error is told; the
+    // checkpoint's spare goes either way.
+    let released = checkpoint::release(&dir);
     let output = output?;
+    released?;
     if let Some(frame) = simulated? {
         progress.abandon();
         let interrupted = interrupt::requested();
