@@ -28,7 +28,7 @@ use surface::Surface;
 use surface_layers::SurfaceLayers;
 
 use tailor_collide::{CollideError, Hierarchy};
-use tailor_subdiv::{Point, StencilTable};
+use tailor_subdiv::{Point, Refreshed, StencilTable};
 
 use crate::constraint::{Contact, Filter};
 use crate::energy::Vec3;
@@ -139,10 +139,13 @@ impl Collisions {
         faces: Option<&Hierarchy>,
         rest: &[Point],
     ) -> Result<(), CollideError> {
+        // Which refined points read each control point is found once, for the lift's points
+        // and the layers' ends.
+        let points = Refreshed::new(&stencils);
         let layers = faces
-            .map(|faces| SurfaceLayers::new(&stencils, rest, faces.clone()))
+            .map(|faces| SurfaceLayers::new(&stencils, rest, faces.clone(), points.clone()))
             .transpose()?;
-        self.surface = Some(Surface::new(stencils, layers));
+        self.surface = Some(Surface::new(stencils, points, layers));
         Ok(())
     }
 

@@ -83,11 +83,16 @@ pub(crate) struct Surface {
 }
 
 impl Surface {
-    /// The surface `stencils` evaluates, with `layers` its faces when it must clear itself.
-    pub fn new(stencils: StencilTable, layers: Option<SurfaceLayers>) -> Self {
+    /// The surface `stencils` evaluates through `points` (made for them, nothing evaluated
+    /// yet), with `layers` its faces when it must clear itself.
+    pub fn new(
+        stencils: StencilTable,
+        points: Refreshed<Point>,
+        layers: Option<SurfaceLayers>,
+    ) -> Self {
         let n = stencils.control_points;
         Self {
-            points: Refreshed::new(&stencils),
+            points,
             closest: vec![None; stencils.len()],
             near: Vec::new(),
             spare: Vec::new(),
@@ -268,7 +273,8 @@ mod tests {
     /// whose top is at `top`.
     fn sheet_and_box(top: f64) -> (Surface, Vec<Point>, Hierarchy) {
         let sheet = centred_sheet(5, 1.0);
-        let surface = Surface::new(Refiner::new(&sheet, 1).stencils(), None);
+        let stencils = Refiner::new(&sheet, 1).stencils();
+        let surface = Surface::new(stencils.clone(), Refreshed::new(&stencils), None);
         let low = Point::new(-0.5, top - 1.0, -0.5);
         let body = block(low, low + Vec3::new(1.0, 1.0, 1.0));
         let hierarchy =

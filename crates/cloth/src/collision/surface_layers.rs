@@ -50,18 +50,19 @@ pub(super) struct SurfaceLayers {
 
 impl SurfaceLayers {
     /// The refined faces of `hierarchy` over the points `stencils` gives, the hierarchy refit
-    /// at the refined `rest` positions.
+    /// at the refined `rest` positions; `end` evaluates `stencils` (nothing evaluated yet).
     pub fn new(
         stencils: &StencilTable,
         rest: &[Point],
         mut hierarchy: Hierarchy,
+        end: Refreshed<Point>,
     ) -> Result<Self, CollideError> {
         let mut start = vec![Point::origin(); stencils.len()];
         stencils.apply(rest, &mut start);
         hierarchy.refit(&start, 0.0)?;
         Ok(Self {
             hierarchy,
-            end: Refreshed::new(stencils),
+            end,
             start,
             impacts: SelfImpacts::default(),
             touched: vec![false; rest.len()],
