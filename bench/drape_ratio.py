@@ -3,7 +3,7 @@
 The host's speed changes by the hour (by 40% on a shared 2-core machine), so a ratio means
 something only between runs made one right after the other. Each pair runs Blender's drape
 (`bench/blender_drape.py`, self-collision on) and then `tailor simulate` on the same drape,
-and prints Blender's time for its 59 simulated frames, tailor's wall time for the whole
+and prints Blender's time for its 60 simulated frames, tailor's wall time for the whole
 process (every frame simulated, checked and written), their ratio, and what each run's
 quality was: Blender's worst stretch, tailor's worst strain and its frames not clean (a
 point of the written surface within the thickness of the sphere, or a self-intersection).
@@ -29,7 +29,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 SCRIPT = HERE / "blender_drape.py"
 BLENDER_LINE = re.compile(r"([\d.]+) ms/frame, worst stretch ([\d.]+)%")
-SIMULATED_FRAMES = 59
+SIMULATED_FRAMES = 60
 
 
 def blender_command(args):
