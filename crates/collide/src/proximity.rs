@@ -233,16 +233,7 @@ impl Hierarchy {
         max_distance: f64,
         out: &mut Vec<Option<Closest>>,
     ) -> Result<(), CollideError> {
-        check_distance("max_distance", max_distance)?;
-        check_queries(queries)?;
-        queries
-            .par_iter()
-            .with_min_len(QUERY_RUN)
-            .map_init(Scratch::default, |scratch, q| {
-                self.nearest(to_glam(q), max_distance, scratch)
-            })
-            .collect_into_vec(out);
-        Ok(())
+        self.closest_points_from(queries, max_distance, |_| None, out)
     }
 
     /// [`Hierarchy::closest_points_into`] with a face near each query, `seeds[i]` for
@@ -271,14 +262,26 @@ impl Hierarchy {
                 .all(|&f| (f as usize) < self.face_count()),
             "seeds are faces of the mesh"
         );
+        self.closest_points_from(queries, max_distance, |i| seeds[i], out)
+    }
+
+    /// The closest points of `queries` within `max_distance` into `out`, query `i` trying
+    /// `seed(i)` first when it names a face, else the face of the previous query's answer.
+    fn closest_points_from(
+        &self,
+        queries: &[Point],
+        max_distance: f64,
+        seed: impl Fn(usize) -> Option<u32> + Sync,
+        out: &mut Vec<Option<Closest>>,
+    ) -> Result<(), CollideError> {
         check_distance("max_distance", max_distance)?;
         check_queries(queries)?;
         queries
             .par_iter()
-            .zip(seeds)
+            .enumerate()
             .with_min_len(QUERY_RUN)
-            .map_init(Scratch::default, |scratch, (q, &seed)| {
-                scratch.seed = seed.or(scratch.seed);
+            .map_init(Scratch::default, |scratch, (i, q)| {
+                scratch.seed = seed(i).or(scratch.seed);
                 self.nearest(to_glam(q), max_distance, scratch)
             })
             .collect_into_vec(out);
