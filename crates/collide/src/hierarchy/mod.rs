@@ -66,13 +66,21 @@ pub struct Hierarchy {
     pub(crate) start: Vec<DVec3>,
     /// Positions at the end of the step of a swept refit; empty after a static refit.
     end: Vec<DVec3>,
-    /// The margin of the last refit when it was swept.
-    swept_margin: Option<f64>,
+    /// The kind and margin of the last refit.
+    last_refit: LastRefit,
     /// How many refits this value has had (see [`Hierarchy::refit_count`]).
     refits: u64,
     /// The triangle that last failed each node's and each vertex star's normal-cone test
     /// (see [`crate::cones`]).
     pub(crate) witnesses: Witnesses,
+}
+
+/// What the last refit boxed, with the margin it loosened the boxes by: a refit like it from
+/// the same positions leaves the boxes as they are.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LastRefit {
+    Static(f64),
+    Swept(f64),
 }
 
 impl Hierarchy {
@@ -109,7 +117,7 @@ impl Hierarchy {
             boxes: Boxes::default(),
             start,
             end: Vec::new(),
-            swept_margin: None,
+            last_refit: LastRefit::Static(0.0),
             refits: 0,
             witnesses: Witnesses::default(),
         };

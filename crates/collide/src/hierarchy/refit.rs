@@ -23,7 +23,9 @@
 use parry3d_f64::math::Vector as DVec3;
 
 use super::boxes::Fit;
-use super::{Hierarchy, check_count, check_distance, check_positions, convert_into, finite, store};
+use super::{
+    Hierarchy, LastRefit, check_count, check_distance, check_positions, convert_into, finite, store,
+};
 use crate::Point;
 use crate::ccd::CONTACT_SLACK;
 use crate::convert::{to_glam, to_point};
@@ -35,7 +37,9 @@ use crate::topology::Topology;
 const PARTIAL_SHARE: usize = 4;
 
 impl Hierarchy {
-    /// Refits the boxes to `positions`, loosened by `margin`.
+    /// Refits the boxes to `positions`, loosened by `margin`. When the last refit was static,
+    /// with the same margin and the same positions to the bit (a body that holds still
+    /// between substeps), the boxes are already these and are kept.
     ///
     /// # Errors
     /// [`CollideError::PositionCount`] when `positions` does not match the mesh,
@@ -43,10 +47,18 @@ impl Hierarchy {
     /// [`CollideError::BadDistance`] for a negative or NaN margin.
     pub fn refit(&mut self, positions: &[Point], margin: f64) -> Result<(), CollideError> {
         check_distance("margin", margin)?;
-        convert_into(positions, self.vertex_count(), &mut self.start)?;
-        self.end.clear();
-        self.refit_boxes(margin);
-        self.swept_margin = None;
+        let unchanged = self.last_refit == LastRefit::Static(margin)
+            && positions.len() == self.start.len()
+            && positions
+                .iter()
+                .zip(&self.start)
+                .all(|(p, &q)| same_bits(p, &to_point(q)));
+        if !unchanged {
+            convert_into(positions, self.vertex_count(), &mut self.start)?;
+            self.end.clear();
+            self.refit_boxes(margin);
+            self.last_refit = LastRefit::Static(margin);
+        }
         self.refits += 1;
         Ok(())
     }
@@ -68,7 +80,7 @@ impl Hierarchy {
         let count = self.vertex_count();
         check_positions(start, count)?;
         check_positions(end, count)?;
-        if self.swept_margin == Some(margin)
+        if self.last_refit == LastRefit::Swept(margin)
             && start
                 .iter()
                 .zip(&self.start)
@@ -83,7 +95,7 @@ impl Hierarchy {
         store(start, &mut self.start);
         store(end, &mut self.end);
         self.refit_boxes(margin);
-        self.swept_margin = Some(margin);
+        self.last_refit = LastRefit::Swept(margin);
         self.refits += 1;
         Ok(())
     }
@@ -100,7 +112,7 @@ impl Hierarchy {
     /// for `end`'s length and the moved vertices' positions; the boxes are then left as they
     /// were.
     pub fn refit_swept_ends(&mut self, end: &[Point], moved: &[u32]) -> Result<(), CollideError> {
-        let Some(margin) = self.swept_margin else {
+        let LastRefit::Swept(margin) = self.last_refit else {
             return Err(CollideError::NotSwept);
         };
         check_count(end, self.vertex_count())?;
@@ -290,6 +302,38 @@ mod tests {
         let (got, want) = (box_bits(h), box_bits(&fresh));
         let differs = (0..want.len()).find(|&n| got[n] != want[n]);
         assert_eq!(differs, None, "a node's box differs from a whole refit's");
+    }
+
+    /// A static refit at the positions and margin of the last one keeps its boxes, and a
+    /// moved vertex, another margin or a swept refit in between gives the boxes of a whole
+    /// refit.
+    #[test]
+    fn a_static_refit_at_the_last_positions_keeps_the_boxes_a_change_refits() {
+        let (start, offsets, corners) = crate::hierarchy::grid(12, 1);
+        let fresh = |positions: &[Point], margin: f64| {
+            let mut h = Hierarchy::build(&start, &offsets, &corners).unwrap();
+            h.refit_swept(&start, positions, margin).unwrap();
+            h.refit(positions, margin).unwrap();
+            box_bits(&h)
+        };
+        let mut h = Hierarchy::build(&start, &offsets, &corners).unwrap();
+        let posed = lifted(&start, &[5, 60, 130], 0.25);
+        h.refit(&posed, 0.1).unwrap();
+        let count = h.refit_count();
+        h.refit(&posed, 0.1).unwrap();
+        assert_eq!(box_bits(&h), fresh(&posed, 0.1));
+        assert_eq!(h.refit_count(), count + 1, "a kept refit still counts");
+        let mut nudged = posed.clone();
+        nudged[60].x += 0.5;
+        h.refit(&nudged, 0.1).unwrap();
+        assert_eq!(box_bits(&h), fresh(&nudged, 0.1));
+        h.refit(&nudged, 0.2).unwrap();
+        assert_eq!(box_bits(&h), fresh(&nudged, 0.2));
+        // Swept from the same positions to others, then static at the first again.
+        h.refit_swept(&nudged, &posed, 0.2).unwrap();
+        h.refit(&nudged, 0.2).unwrap();
+        assert!(!h.is_swept());
+        assert_eq!(box_bits(&h), fresh(&nudged, 0.2));
     }
 
     /// `end` with the vertices `moved` lists lifted by `dz` and moved sideways a third of it.
