@@ -10,12 +10,14 @@
 //!
 //! Neighbouring triangles of a smooth surface are nearly coplanar, so the orientations of one
 //! against the other's plane fall back to exact arithmetic, the slow path of the adaptive
-//! predicates, although the triangles lie side by side. Two filters reject such pairs first,
+//! predicates, although the triangles lie side by side. Three filters reject such pairs first,
 //! each only when the triangles are strictly apart, so the answers are the same with or
-//! without them: their boxes are disjoint, or a plane through an edge of one (and a point
-//! off the triangle along its normal) has that triangle strictly on one side and the other
-//! triangle strictly on the other. Any point off the edge's line makes such a plane, so its
-//! rounding does not matter, and its orientations are well away from zero, the fast path.
+//! without them: their boxes are disjoint; their projections on the line through their
+//! centroids are disjoint by more than the projections' rounding (a dot product's error
+//! bound, in plain floating point: no predicate); or a plane through an edge of one (and a
+//! point off the triangle along its normal) has that triangle strictly on one side and the
+//! other triangle strictly on the other. Any point off the edge's line makes such a plane, so
+//! its rounding does not matter, and its orientations are well away from zero, the fast path.
 
 use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::query::PointQuery;
@@ -46,10 +48,44 @@ pub fn triangles_intersect(p: [Point; 3], q: [Point; 3]) -> bool {
 
 /// [`triangles_intersect`] on glam vectors.
 pub(crate) fn triangles_meet(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
-    if boxes_apart(p, q) || edge_plane_separates(p, q) || edge_plane_separates(q, p) {
+    if boxes_apart(p, q)
+        || centroids_apart(p, q)
+        || edge_plane_separates(p, q)
+        || edge_plane_separates(q, p)
+    {
         return false;
     }
     triangles_meet_exact(p, q)
+}
+
+/// Whether two triangles lie apart along the line through their centroids by more than the
+/// projections' rounding ([`apart_along`]).
+fn centroids_apart(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
+    let sum = |t: [DVec3; 3]| t[0] + t[1] + t[2];
+    apart_along(sum(q) - sum(p), p, q)
+}
+
+/// Bound on the rounding of a projection `axis · x`, relative to `|axis| · |x|`: a dot
+/// product of three terms is within γ₃ ≈ 3u of its exact value times that sum (Higham,
+/// "Accuracy and Stability of Numerical Algorithms", §3.1; u = 2⁻⁵³), and the bound itself
+/// and the shifted ends are rounded too; 8u covers all three.
+const PROJECTION_ROUNDING: f64 = 4.0 * f64::EPSILON;
+
+/// Whether the projections of `p` and `q` on `axis` are disjoint by more than their rounding:
+/// a plane normal to `axis` then parts the two triangles (the separating axis theorem), and
+/// `axis` itself may be any rounded direction.
+fn apart_along(axis: DVec3, p: [DVec3; 3], q: [DVec3; 3]) -> bool {
+    let size = axis.abs();
+    let range = |t: [DVec3; 3]| {
+        t.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(low, high), &x| {
+                let along = axis.dot(x);
+                let rounding = size.dot(x.abs()) * PROJECTION_ROUNDING;
+                (low.min(along - rounding), high.max(along + rounding))
+            })
+    };
+    let ((p_low, p_high), (q_low, q_high)) = (range(p), range(q));
+    p_high < q_low || q_high < p_low
 }
 
 /// Whether the boxes of two triangles are disjoint (touching boxes are not).
@@ -346,7 +382,7 @@ mod tests {
             let exact = triangles_meet_exact(p, q);
             assert_eq!(triangles_meet(p, q), exact, "{p:?} {q:?}");
             meeting += usize::from(exact);
-            let filtered = boxes_apart(p, q) || edge_plane_separates(p, q);
+            let filtered = boxes_apart(p, q) || centroids_apart(p, q) || edge_plane_separates(p, q);
             rejected += usize::from(filtered && !is_degenerate(p) && !is_degenerate(q));
         }
         assert!(rejected > 1000 && meeting > 1000, "{rejected} {meeting}");
