@@ -308,6 +308,11 @@ pub struct Clearances {
     gap: Vec<f64>,
     todo: Vec<u32>,
     queries: Vec<Point3<f64>>,
+    /// Each cloth vertex's closest body face when last measured, where its next walk starts
+    /// (the stale vertices are scattered over the cloth, so the one before in the list is
+    /// seldom near).
+    faces: Vec<Option<u32>>,
+    seeds: Vec<Option<u32>>,
 }
 
 impl Clearances {
@@ -346,9 +351,22 @@ impl Clearances {
         self.queries.clear();
         self.queries
             .extend(self.todo.iter().map(|&i| cloth[i as usize]));
-        let measured = body.signed_distances(&self.queries)?;
-        for (&i, d) in self.todo.iter().zip(measured) {
+        if self.faces.len() != cloth.len() {
+            self.faces = vec![None; cloth.len()];
+        }
+        self.seeds.clear();
+        // Any face is a sound seed; one past a body of fewer faces (a sequence whose body
+        // changed) is dropped.
+        let faces = body.face_count();
+        self.seeds.extend(
+            self.todo
+                .iter()
+                .map(|&i| self.faces[i as usize].filter(|&f| (f as usize) < faces)),
+        );
+        let measured = body.signed_distances_seeded(&self.queries, &self.seeds)?;
+        for (&i, (d, face)) in self.todo.iter().zip(measured) {
             self.bounds.set(i, d);
+            self.faces[i as usize] = face;
         }
         Ok(self.bounds.bounds())
     }

@@ -42,23 +42,59 @@ impl Hierarchy {
     /// [`CollideError::NotClosed`] when the mesh has a boundary or a non-manifold edge,
     /// [`CollideError::NonFiniteQuery`] for a NaN or infinite query point.
     pub fn signed_distances(&self, queries: &[Point]) -> Result<Vec<f64>, CollideError> {
+        let signed = self.signed_from(queries, |_| None)?;
+        Ok(signed.into_iter().map(|(d, _)| d).collect())
+    }
+
+    /// [`Hierarchy::signed_distances`] with a face near each query, `seeds[i]` for
+    /// `queries[i]`, tried first ([`Hierarchy::closest_points_seeded_into`]: the face of its
+    /// last answer, for a point that moved little since), and with the face of each answer
+    /// (`None` when the mesh has no face to answer with) for the next call's seeds. The
+    /// distances are the same bits with any seeds, or none.
+    ///
+    /// # Errors
+    /// As [`Hierarchy::signed_distances`].
+    ///
+    /// # Panics
+    /// When `seeds` and `queries` differ in length, or a seed is not a face of the mesh.
+    pub fn signed_distances_seeded(
+        &self,
+        queries: &[Point],
+        seeds: &[Option<u32>],
+    ) -> Result<Vec<(f64, Option<u32>)>, CollideError> {
+        self.assert_seeds(queries, seeds);
+        self.signed_from(queries, |i| seeds[i])
+    }
+
+    /// The signed distance of each query and the face of its closest point, query `i`'s
+    /// walk starting from `seed(i)` when it names a face (see
+    /// [`Hierarchy::closest_points_seeded_into`]).
+    fn signed_from(
+        &self,
+        queries: &[Point],
+        seed: impl Fn(usize) -> Option<u32> + Sync,
+    ) -> Result<Vec<(f64, Option<u32>)>, CollideError> {
         let open_edges = self.open_edges();
         if open_edges > 0 {
             return Err(CollideError::NotClosed { open_edges });
         }
-        let closest = self.closest_points(queries, f64::INFINITY)?;
+        let mut closest = Vec::new();
+        self.closest_points_from(queries, f64::INFINITY, seed, &mut closest)?;
         let normals = PseudoNormals { h: self };
         Ok(queries
             .par_iter()
             .zip(closest)
             .map(|(q, c)| {
-                let Some(c) = c else { return f64::INFINITY };
+                let Some(c) = c else {
+                    return (f64::INFINITY, None);
+                };
                 let n = normals.at(c.triangle as usize, c.barycentric);
-                if (to_glam(q) - to_glam(&c.point)).dot(n) < 0.0 {
+                let distance = if (to_glam(q) - to_glam(&c.point)).dot(n) < 0.0 {
                     -c.distance
                 } else {
                     c.distance
-                }
+                };
+                (distance, Some(c.face))
             })
             .collect())
     }

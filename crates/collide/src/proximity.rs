@@ -254,6 +254,12 @@ impl Hierarchy {
         seeds: &[Option<u32>],
         out: &mut Vec<Option<Closest>>,
     ) -> Result<(), CollideError> {
+        self.assert_seeds(queries, seeds);
+        self.closest_points_from(queries, max_distance, |i| seeds[i], out)
+    }
+
+    /// Panics unless there is a seed per query and each names a face of the mesh.
+    pub(crate) fn assert_seeds(&self, queries: &[Point], seeds: &[Option<u32>]) {
         assert_eq!(seeds.len(), queries.len(), "a seed per query");
         assert!(
             seeds
@@ -262,12 +268,11 @@ impl Hierarchy {
                 .all(|&f| (f as usize) < self.face_count()),
             "seeds are faces of the mesh"
         );
-        self.closest_points_from(queries, max_distance, |i| seeds[i], out)
     }
 
     /// The closest points of `queries` within `max_distance` into `out`, query `i` trying
     /// `seed(i)` first when it names a face, else the face of the previous query's answer.
-    fn closest_points_from(
+    pub(crate) fn closest_points_from(
         &self,
         queries: &[Point],
         max_distance: f64,

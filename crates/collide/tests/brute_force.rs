@@ -12,7 +12,7 @@ use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::Triangle;
 use tailor_collide::{
-    CollideError, DistanceBounds, Hierarchy, Impacts, LocalFaces, Neighbours, Point,
+    Closest, CollideError, DistanceBounds, Hierarchy, Impacts, LocalFaces, Neighbours, Point,
     edge_edge_impact, segments_closest_points, triangles_intersect, vertex_triangle_impact,
 };
 
@@ -110,6 +110,20 @@ fn closest_points_match_brute_force() {
     }
 }
 
+/// Seeds for queries whose answers are `answers`, by turns the answer's own face, another of
+/// the mesh's `faces` (most likely far from it) and none.
+fn mixed_seeds(answers: &[Option<Closest>], faces: u32) -> Vec<Option<u32>> {
+    answers
+        .iter()
+        .enumerate()
+        .map(|(i, c)| match i % 3 {
+            0 => c.map(|c| c.face),
+            1 => Some((i as u32 * 7919) % faces),
+            _ => None,
+        })
+        .collect()
+}
+
 /// A seed per query, whichever face it names (the true answer's, a far one, or none), leaves
 /// every answer the same bits as the unseeded queries, which match brute force above.
 #[test]
@@ -121,15 +135,7 @@ fn seeded_closest_points_are_the_unseeded_ones() {
         let queries: Vec<Point> = (0..60).map(|_| rng.point(1.5)).collect();
         for d in [0.1, 0.4, f64::INFINITY] {
             let want = h.closest_points(&queries, d).unwrap();
-            let seeds: Vec<Option<u32>> = want
-                .iter()
-                .enumerate()
-                .map(|(i, c)| match i % 3 {
-                    0 => c.map(|c| c.face),
-                    1 => Some((i as u32 * 7919) % faces),
-                    _ => None,
-                })
-                .collect();
+            let seeds = mixed_seeds(&want, faces);
             let mut got = Vec::new();
             h.closest_points_seeded_into(&queries, d, &seeds, &mut got)
                 .unwrap();
@@ -707,6 +713,27 @@ fn signed_distance_sign_matches_winding_number() {
             assert_eq!(s.abs(), c.unwrap().distance);
             let inside = winding_number(&m, q) > 0.5;
             assert_eq!(s < 0.0, inside, "{q}");
+        }
+    }
+}
+
+/// Signed distances seeded with any faces (each answer's own, a far one, none) are the
+/// unseeded ones to the bit, which the test above checks against the winding number, and
+/// each answer names the face of its closest point.
+#[test]
+fn seeded_signed_distances_are_the_unseeded_ones() {
+    let mut rng = Rng::new(6);
+    for m in [sphere(8, 12, 1.0), torus(16, 8, 1.0, 0.4)] {
+        let h = build(&m);
+        let faces = h.face_count() as u32;
+        let queries: Vec<Point> = (0..200).map(|_| rng.point(1.5)).collect();
+        let want = h.signed_distances(&queries).unwrap();
+        let closest = h.closest_points(&queries, f64::INFINITY).unwrap();
+        let seeds = mixed_seeds(&closest, faces);
+        let got = h.signed_distances_seeded(&queries, &seeds).unwrap();
+        for (i, ((d, face), c)) in got.iter().zip(&closest).enumerate() {
+            assert_eq!(d.to_bits(), want[i].to_bits(), "query {i}");
+            assert_eq!(*face, c.map(|c| c.face), "query {i}");
         }
     }
 }
