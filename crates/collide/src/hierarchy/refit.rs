@@ -47,13 +47,8 @@ impl Hierarchy {
     /// [`CollideError::BadDistance`] for a negative or NaN margin.
     pub fn refit(&mut self, positions: &[Point], margin: f64) -> Result<(), CollideError> {
         check_distance("margin", margin)?;
-        let unchanged = self.last_refit == LastRefit::Static(margin)
-            && positions.len() == self.start.len()
-            && positions
-                .iter()
-                .zip(&self.start)
-                .all(|(p, &q)| same_bits(p, &to_point(q)));
-        if !unchanged {
+        if !(self.last_refit == LastRefit::Static(margin) && same_positions(positions, &self.start))
+        {
             convert_into(positions, self.vertex_count(), &mut self.start)?;
             self.end.clear();
             self.refit_boxes(margin);
@@ -80,12 +75,7 @@ impl Hierarchy {
         let count = self.vertex_count();
         check_positions(start, count)?;
         check_positions(end, count)?;
-        if self.last_refit == LastRefit::Swept(margin)
-            && start
-                .iter()
-                .zip(&self.start)
-                .all(|(p, &q)| same_bits(p, &to_point(q)))
-        {
+        if self.last_refit == LastRefit::Swept(margin) && same_positions(start, &self.start) {
             let moved: Vec<u32> = (0..count as u32)
                 .filter(|&v| !same_bits(&end[v as usize], &to_point(self.end[v as usize])))
                 .collect();
@@ -166,6 +156,15 @@ fn fit<'a>(topology: &'a Topology, start: &'a [DVec3], end: &'a [DVec3], margin:
         margin,
         relative: CONTACT_SLACK,
     }
+}
+
+/// Whether `positions` are those `stored`, every coordinate the same bits.
+fn same_positions(positions: &[Point], stored: &[DVec3]) -> bool {
+    positions.len() == stored.len()
+        && positions
+            .iter()
+            .zip(stored)
+            .all(|(p, &q)| same_bits(p, &to_point(q)))
 }
 
 #[cfg(test)]
