@@ -394,7 +394,15 @@ impl Multigrid {
     /// The fine level's part of the preconditioner at particle `i` of the residual `r`:
     /// ω S_i D_i⁻¹ r_i, for the `filter` S given to the last [`Self::update`].
     pub fn smooth(&self, filter: &[Mat3], i: usize, r: Vec3) -> Vec3 {
-        filter[i] * (self.inverse_diagonal[i] * r) * FINE_OMEGA
+        self.filtered(filter, i, self.inverse_diagonal[i] * r) * FINE_OMEGA
+    }
+
+    /// S_i v, for the `filter` S given to the last [`Self::update`]: v itself where S_i is
+    /// the identity (most particles; the product would give the same numbers, but for the
+    /// sign of a zero), without reading the filter.
+    #[inline]
+    pub fn filtered(&self, filter: &[Mat3], i: usize, v: Vec3) -> Vec3 {
+        if self.free[i] { v } else { filter[i] * v }
     }
 
     /// The coarse levels' part of the preconditioner on the fine residual `r` (filtered):

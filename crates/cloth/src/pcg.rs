@@ -151,7 +151,7 @@ impl Pcg {
             let mg = &*multigrid;
             x.par_chunks_mut(CHUNK).enumerate().for_each(|(c, x)| {
                 for (i, x) in (c * CHUNK..).zip(x) {
-                    *x += filter[i] * mg.correction(i);
+                    *x += mg.filtered(filter, i, mg.correction(i));
                 }
             });
             let corrected = start(a, filter, b, x, r, z, q, multigrid, partials);
@@ -190,7 +190,7 @@ impl Pcg {
                 .enumerate()
                 .for_each(|(c, (p, z))| {
                     for (i, (p, z)) in (c * CHUNK..).zip(p.iter_mut().zip(z)) {
-                        *p = z + filter[i] * mg.correction(i) + *p * beta;
+                        *p = z + mg.filtered(filter, i, mg.correction(i)) + *p * beta;
                     }
                 });
             iterations += 1;
@@ -200,7 +200,7 @@ impl Pcg {
                 a.mul_rows(base, p_now, q);
                 let mut pq = 0.0;
                 for (i, q) in (base..).zip(q) {
-                    *q = filter[i] * *q;
+                    *q = multigrid.filtered(filter, i, *q);
                     pq += p_now[i].dot(q);
                 }
                 [pq, 0.0]
@@ -248,7 +248,7 @@ fn start(
     chunked(chunks, partials, |base, (r, z)| {
         let mut sums = [0.0; 2];
         for (i, (r, z)) in (base..).zip(r.iter_mut().zip(z)) {
-            *r = filter[i] * (b[i] - q[i]);
+            *r = multigrid.filtered(filter, i, b[i] - q[i]);
             *z = multigrid.smooth(filter, i, *r);
             sums[0] += r.dot(r);
             sums[1] += r.dot(z);
