@@ -34,7 +34,11 @@
 //!   level each V-cycle is multiplicative: a damped
 //!   block-Jacobi sweep, the residual restricted to the next level, the cycle there, its
 //!   correction prolonged, a second sweep; the coarsest level is solved by dense Cholesky.
-//!   Both parts are symmetric and positive, so CG stays CG.
+//!   Both parts are symmetric and positive, so CG stays CG. The cycle runs on one thread: a
+//!   pass over the 64² drape's first coarse level (704 nodes) takes tens of microseconds,
+//!   less than waking the other worker for half of it costs. Split into tasks of 128 rows,
+//!   the cycles of that drape took 73 ms of its run, on one thread 52–56 ms (the 128² drape:
+//!   271–286 ms and 220–250 ms), the same iterates either way.
 //!
 //! The constraint filter S of [`crate::pcg`] enters at the fine level: the hierarchy is built
 //! on S A S + (I − S), which decouples the constrained components, and every fine residual and
@@ -72,11 +76,6 @@ const COARSEST: usize = 64;
 
 /// Coarsening stops when a level would keep more than this fraction of the nodes above it.
 const MIN_REDUCTION: f64 = 0.75;
-
-/// Rows per parallel task on the coarse levels (the fine level's [`CHUNK`] would leave the
-/// 680 rows of the 64² drape's first coarse level to one thread). No sum crosses rows, so
-/// the split does not change results.
-const COARSE_ROWS: usize = 128;
 
 /// Largest coarsest level, in nodes, solved by dense Cholesky (else by one Jacobi sweep): more
 /// than [`COARSEST`] only when coarsening stalls, as on many disconnected pieces.
@@ -237,25 +236,17 @@ fn invert_diagonal<T: Precision>(
 
 /// x = ω D⁻¹ r (the first sweep, from x = 0).
 fn first_sweep(x: &mut [Vec3], r: &[Vec3], inverse_diagonal: &[Mat3]) {
-    x.par_chunks_mut(COARSE_ROWS)
-        .enumerate()
-        .for_each(|(c, x)| {
-            for (i, x) in (c * COARSE_ROWS..).zip(x) {
-                *x = inverse_diagonal[i] * r[i] * OMEGA;
-            }
-        });
+    for ((x, r), d) in x.iter_mut().zip(r).zip(inverse_diagonal) {
+        *x = d * r * OMEGA;
+    }
 }
 
 /// t = r − A x.
 fn residual(t: &mut [Vec3], r: &[Vec3], a: &BlockMatrix<f64>, x: &[Vec3]) {
-    t.par_chunks_mut(COARSE_ROWS)
-        .enumerate()
-        .for_each(|(c, t)| {
-            a.mul_rows(c * COARSE_ROWS, x, t);
-            for (i, t) in (c * COARSE_ROWS..).zip(t) {
-                *t = r[i] - *t;
-            }
-        });
+    a.mul_rows(0, x, t);
+    for (t, r) in t.iter_mut().zip(r) {
+        *t = r - *t;
+    }
 }
 
 /// t = x + ω D⁻¹ (r − A x) (the second sweep, written beside x).
@@ -266,40 +257,25 @@ fn last_sweep(
     a: &BlockMatrix<f64>,
     inverse_diagonal: &[Mat3],
 ) {
-    t.par_chunks_mut(COARSE_ROWS)
-        .enumerate()
-        .for_each(|(c, t)| {
-            a.mul_rows(c * COARSE_ROWS, x, t);
-            for (i, t) in (c * COARSE_ROWS..).zip(t) {
-                *t = x[i] + inverse_diagonal[i] * (r[i] - *t) * OMEGA;
-            }
-        });
+    a.mul_rows(0, x, t);
+    for (i, t) in t.iter_mut().enumerate() {
+        *t = x[i] + inverse_diagonal[i] * (r[i] - *t) * OMEGA;
+    }
 }
 
 /// The coarse right-hand side: each aggregate's sum of the fine residuals `t`.
 fn restrict(coarse: &mut Level, t: &[Vec3]) {
     let members = &coarse.members;
-    coarse
-        .r
-        .par_chunks_mut(COARSE_ROWS)
-        .enumerate()
-        .for_each(|(c, r)| {
-            for (k, r) in (c * COARSE_ROWS..).zip(r) {
-                *r = members.row(k).iter().map(|&i| t[i as usize]).sum();
-            }
-        });
+    for (k, r) in coarse.r.iter_mut().enumerate() {
+        *r = members.row(k).iter().map(|&i| t[i as usize]).sum();
+    }
 }
 
 /// x += P e: each node takes its aggregate's correction.
 fn prolong(x: &mut [Vec3], coarse: &Level) {
-    let (parent, e) = (&coarse.parent, &coarse.x);
-    x.par_chunks_mut(COARSE_ROWS)
-        .enumerate()
-        .for_each(|(c, x)| {
-            for (i, x) in (c * COARSE_ROWS..).zip(x) {
-                *x += e[parent[i] as usize];
-            }
-        });
+    for (x, &p) in x.iter_mut().zip(&coarse.parent) {
+        *x += coarse.x[p as usize];
+    }
 }
 
 impl Multigrid {
