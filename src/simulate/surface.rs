@@ -148,8 +148,8 @@ impl Surface {
     /// nearest. Each coordinate stays within two `f32` steps of the simulation's, and the two
     /// triangles stay apart: at the default precision two layers less than an `f32` step
     /// apart (tens of nanometres within a metre of the origin) can otherwise round into each
-    /// other. Refits the hierarchy; returns how many triangle pairs it parted, none at full
-    /// precision.
+    /// other. Refits the hierarchy; returns how many triangle pairs it parted. Not for full
+    /// precision, whose rounding is the identity.
     ///
     /// # Errors
     /// When a position is not finite.
@@ -159,9 +159,6 @@ impl Surface {
         crossing: &[[u32; 2]],
         precision: Precision,
     ) -> Result<usize> {
-        if precision == Precision::Full {
-            return Ok(0);
-        }
         let rounded = self.mesh.positions();
         let mut parted = rounded.to_vec();
         let triangles = self.hierarchy.triangles();
@@ -196,11 +193,15 @@ impl Surface {
     }
 
     /// [`Self::round_apart`] on the faces [`Hierarchy::self_intersections`] finds, until none
-    /// cross, nothing is parted, or [`ROUNDING_APART_TRIES`] runs; `exact` as there.
+    /// cross, nothing is parted, or [`ROUNDING_APART_TRIES`] runs; `exact` as there. Nothing
+    /// at full precision, which parts nothing, so the query would be asked for nothing.
     ///
     /// # Errors
     /// As [`Self::round_apart`].
     pub fn round_crossings_apart(&mut self, exact: &[Point], precision: Precision) -> Result<()> {
+        if precision == Precision::Full {
+            return Ok(());
+        }
         for _ in 0..ROUNDING_APART_TRIES {
             let crossing = self.hierarchy.self_intersections();
             if crossing.is_empty() || self.round_apart(exact, &crossing, precision)? == 0 {
