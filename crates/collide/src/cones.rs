@@ -249,8 +249,9 @@ impl<'a> Stars<'a> {
             NOT_CLEARED => false,
             _ => {
                 let faces = self.h.vertex_faces().of(v as usize);
+                let mut boundary = [[0; 2]; STAR_EDGES];
                 let cleared =
-                    star_boundary(&self.h.topology, v, faces).is_some_and(|(boundary, len)| {
+                    star_boundary(&self.h.topology, v, faces, &mut boundary).is_some_and(|len| {
                         let slot = Witnesses::star(self.h, v as usize);
                         self.cones.superface_cannot_self_collide(
                             self.h,
@@ -312,22 +313,22 @@ impl Witnesses {
 /// it) is left to the exact tests.
 const STAR_EDGES: usize = 48;
 
-/// The boundary chain of the star of `v` made of `faces`, or `None` when it has more than
-/// [`STAR_EDGES`] edges. An edge at `v` of one face cancels the opposite edge of the next
-/// around it; an edge away from `v` is kept even when another face of the star has it the
-/// other way (a fold of the mesh's own making): one of the two then turns backwards and the
-/// contour test fails, which is safe.
+/// The boundary chain of the star of `v` made of `faces` into `edges`, returning its length,
+/// or `None` when it has more than [`STAR_EDGES`] edges. An edge at `v` of one face cancels
+/// the opposite edge of the next around it; an edge away from `v` is kept even when another
+/// face of the star has it the other way (a fold of the mesh's own making): one of the two
+/// then turns backwards and the contour test fails, which is safe.
 fn star_boundary(
     topology: &Topology,
     v: u32,
     faces: &[u32],
-) -> Option<([[u32; 2]; STAR_EDGES], usize)> {
-    let mut edges = [[0; 2]; STAR_EDGES];
+    edges: &mut [[u32; 2]; STAR_EDGES],
+) -> Option<usize> {
     let mut len = 0;
     for &f in faces {
         let corners = topology.face(f);
         for (i, &p) in corners.iter().enumerate() {
-            let q = corners[(i + 1) % corners.len()];
+            let q = corners[if i + 1 == corners.len() { 0 } else { i + 1 }];
             if (p == v || q == v)
                 && let Some(k) = edges[..len].iter().position(|&e| e == [q, p])
             {
@@ -339,7 +340,7 @@ fn star_boundary(
             len += 1;
         }
     }
-    Some((edges, len))
+    Some(len)
 }
 
 /// Faces a thread sums or checks in a row.
