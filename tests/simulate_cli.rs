@@ -772,6 +772,67 @@ fn dragged(dir: &Path, frames: u32, edit: Edit) -> PathBuf {
     shot(dir, &all)
 }
 
+/// The `v` lines of an OBJ's text.
+fn vertices(text: &[u8]) -> Vec<[f64; 3]> {
+    String::from_utf8_lossy(text)
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let mut xyz = l.split(' ').map(|x| x.parse::<f64>().unwrap());
+            [(); 3].map(|()| xyz.next().unwrap())
+        })
+        .collect()
+}
+
+/// The written body is the frame's pose whether the body moves or holds still (a body that
+/// holds still writes the bytes of the frame before again without formatting them): the
+/// cube still for two frames, moved, still again, moved.
+#[test]
+fn written_body_follows_a_body_that_stops_and_starts() {
+    let dir = scratch("simulate_cli_stop_start");
+    let seq = dir.join("seq");
+    fs::create_dir_all(&seq).unwrap();
+    let offsets = [0.0, 0.0, 0.3, 0.3, 0.3, 0.5];
+    for (k, dx) in offsets.iter().enumerate() {
+        fs::write(seq.join(format!("body_{k:04}.obj")), cube(*dx)).unwrap();
+    }
+    let count = format!("frames = {}", offsets.len() - 1);
+    let scene = shot(
+        &dir,
+        &[
+            ("frames = 10", count.as_str()),
+            (
+                "mesh = \"cube.obj\"",
+                "mesh = \"seq/body_####.obj\"\nfirst_frame = 0",
+            ),
+        ],
+    );
+    let out = dir.join("out");
+    run_ok(&[
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    let written = objs(&out);
+    let first = vertices(&written["body_0000.obj"]);
+    assert!(!first.is_empty());
+    for (k, dx) in offsets.iter().enumerate() {
+        let body = vertices(&written[&format!("body_{k:04}.obj")]);
+        assert_eq!(body.len(), first.len(), "frame {k}");
+        for (p, q) in body.iter().zip(&first) {
+            // Refinement commutes with a translation; each number is written as an f32.
+            let moved = [q[0] + dx, q[1], q[2]];
+            for (a, b) in p.iter().zip(moved) {
+                assert!(
+                    (a - b).abs() < 1e-6,
+                    "frame {k}: {p:?} is not {q:?} moved by {dx}"
+                );
+            }
+        }
+    }
+}
+
 fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&fs::read(dir.join("summary.json")).unwrap()).unwrap()
 }

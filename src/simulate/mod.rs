@@ -41,7 +41,7 @@ mod summary;
 mod surface;
 
 use std::fs;
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::num::NonZeroUsize;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
@@ -53,6 +53,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use tailor_cloth::{ContactState, Model, Motion, Settings, Simulator, State};
+use tailor_collide::same_bits;
 use tailor_subdiv::Point;
 use tailor_subdiv::obj::Frames;
 
@@ -635,6 +636,9 @@ struct Output<'a> {
     body: Option<Surface>,
     /// The text of the written body but its positions.
     body_text: Option<Frames>,
+    /// The refined body's positions at the last frame, and the bytes of its file once written
+    /// there: a body that holds still is neither rounded and refit again nor formatted again.
+    body_still: Option<(Vec<Point>, Option<Vec<u8>>)>,
     /// The check's clearances of the frame before.
     clearances: Clearances,
     stats: Vec<FrameStats>,
@@ -674,6 +678,7 @@ impl<'a> Output<'a> {
             cloth,
             body_text: body.as_ref().map(|b| b.frames(precision)),
             body,
+            body_still: None,
             clearances: Clearances::default(),
             stats,
             earlier: None,
@@ -703,7 +708,13 @@ impl<'a> Output<'a> {
         self.cloth
             .set(self.cloth.refine(&state.positions), precision)?;
         if let (Some(surface), Some(posed)) = (&mut self.body, body) {
-            surface.set(posed, precision)?;
+            let still = self.body_still.as_ref().is_some_and(|(at, _)| {
+                at.len() == posed.len() && at.iter().zip(&posed).all(|(p, q)| same_bits(p, q))
+            });
+            if !still {
+                surface.set(posed.clone(), precision)?;
+                self.body_still = Some((posed, None));
+            }
         }
         let inspect = |output: &mut Self| {
             crate::check::inspect(
@@ -761,8 +772,16 @@ impl<'a> Output<'a> {
             && let (Some(surface), Some(text), Some(body)) =
                 (&self.body, &self.body_text, &self.scene.body)
         {
+            let kept = self.body_still.as_mut().and_then(|(_, bytes)| bytes.take());
+            let bytes = match kept {
+                Some(bytes) => bytes,
+                None => surface.text(body.control(frame), text)?,
+            };
             written[Sequence::Body as usize] =
-                surface.write(&name(Sequence::Body), body.control(frame), text)?;
+                write_atomically(&name(Sequence::Body), |w| w.write_all(&bytes))?;
+            if let Some((_, kept)) = &mut self.body_still {
+                *kept = Some(bytes);
+            }
         }
         Ok(written)
     }

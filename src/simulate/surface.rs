@@ -237,7 +237,31 @@ impl Surface {
     /// # Errors
     /// Any I/O error, naming the file.
     pub fn write(&self, path: &Path, control: &[Point], text: &Frames) -> Result<u64> {
-        let normals = self.tangents.as_ref().map(|[t1, t2]| {
+        let normals = self.normals(control);
+        write_atomically(path, |w| {
+            text.write(self.mesh.positions(), normals.as_deref(), w)
+        })
+    }
+
+    /// The bytes [`Self::write`] writes.
+    ///
+    /// # Errors
+    /// When `text` is not this surface's ([`Self::frames`]).
+    pub fn text(&self, control: &[Point], text: &Frames) -> Result<Vec<u8>> {
+        let mut bytes = Vec::new();
+        text.write(
+            self.mesh.positions(),
+            self.normals(control).as_deref(),
+            &mut bytes,
+        )
+        .context("formatting a refined surface")?;
+        Ok(bytes)
+    }
+
+    /// The limit normals at the refined points for control points `control`, when the surface
+    /// was made with normals.
+    fn normals(&self, control: &[Point]) -> Option<Vec<Vector3<f64>>> {
+        self.tangents.as_ref().map(|[t1, t2]| {
             let coords: Vec<Vector3<f64>> = control.iter().map(|p| p.coords).collect();
             let mut a = vec![Vector3::zeros(); t1.len()];
             let mut b = vec![Vector3::zeros(); t2.len()];
@@ -246,10 +270,7 @@ impl Surface {
             a.iter()
                 .zip(&b)
                 .map(|(a, b)| tailor_subdiv::limit::normal(a, b))
-                .collect::<Vec<_>>()
-        });
-        write_atomically(path, |w| {
-            text.write(self.mesh.positions(), normals.as_deref(), w)
+                .collect()
         })
     }
 }
