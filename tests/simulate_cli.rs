@@ -772,15 +772,14 @@ fn dragged(dir: &Path, frames: u32, edit: Edit) -> PathBuf {
     shot(dir, &all)
 }
 
-/// The `v` lines of an OBJ's text.
+/// The vertex positions of an OBJ's text, read by the project's own reader.
 fn vertices(text: &[u8]) -> Vec<[f64; 3]> {
-    String::from_utf8_lossy(text)
-        .lines()
-        .filter_map(|l| l.strip_prefix("v "))
-        .map(|l| {
-            let mut xyz = l.split(' ').map(|x| x.parse::<f64>().unwrap());
-            [(); 3].map(|()| xyz.next().unwrap())
-        })
+    let text = String::from_utf8_lossy(text);
+    let doc = tailor_subdiv::obj::parse(&text, "written").unwrap();
+    doc.mesh
+        .positions()
+        .iter()
+        .map(|p| [p.x, p.y, p.z])
         .collect()
 }
 
