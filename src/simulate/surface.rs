@@ -15,6 +15,7 @@
 //! stencil's largest weight) and which control face a refined face lies in (from the order in
 //! which uniform refinement numbers its faces).
 
+use std::io::{self, Write};
 use std::path::Path;
 
 use anyhow::{Context, Result};
@@ -237,10 +238,7 @@ impl Surface {
     /// # Errors
     /// Any I/O error, naming the file.
     pub fn write(&self, path: &Path, control: &[Point], text: &Frames) -> Result<u64> {
-        let normals = self.normals(control);
-        write_atomically(path, |w| {
-            text.write(self.mesh.positions(), normals.as_deref(), w)
-        })
+        write_atomically(path, |w| self.format(control, text, w))
     }
 
     /// The bytes [`Self::write`] writes.
@@ -249,13 +247,14 @@ impl Surface {
     /// When `text` is not this surface's ([`Self::frames`]).
     pub fn text(&self, control: &[Point], text: &Frames) -> Result<Vec<u8>> {
         let mut bytes = Vec::new();
-        text.write(
-            self.mesh.positions(),
-            self.normals(control).as_deref(),
-            &mut bytes,
-        )
-        .context("formatting a refined surface")?;
+        self.format(control, text, &mut bytes)
+            .context("formatting a refined surface")?;
         Ok(bytes)
+    }
+
+    /// The refined mesh's text, as [`Self::write`] describes, into `w`.
+    fn format(&self, control: &[Point], text: &Frames, w: &mut impl Write) -> io::Result<()> {
+        text.write(self.mesh.positions(), self.normals(control).as_deref(), w)
     }
 
     /// The limit normals at the refined points for control points `control`, when the surface

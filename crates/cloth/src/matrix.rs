@@ -312,24 +312,39 @@ impl<T: Precision> BlockMatrix<T> {
 
     /// [`Self::mul_rows`] one component at a time.
     fn mul_rows_scalar(&self, first: usize, x: &[Vec3], y: &mut [Vec3]) {
-        let cols = &self.pattern.items;
         for (i, yi) in (first..).zip(y) {
-            let range = self.pattern.range(i);
-            let own = self.own[i] as usize;
             let mut sum = Vec3::zeros();
-            let mirrors = self.value[range.start..own]
-                .iter()
-                .zip(&cols[range.start..own]);
-            for (&v, &col) in mirrors {
-                sum += tr_mul(&self.values[v as usize], &x[col as usize]);
+            for (block, col) in self.mirrored_blocks(i) {
+                sum += tr_mul(block, &x[col]);
             }
-            let start = self.value[own] as usize;
-            let stored = &self.values[start..start + (range.end - own)];
-            for (block, &col) in stored.iter().zip(&cols[own..range.end]) {
-                sum += mul(block, &x[col as usize]);
+            for (block, col) in self.own_blocks(i) {
+                sum += mul(block, &x[col]);
             }
             *yi = sum;
         }
+    }
+
+    /// Row `i`'s slots left of its own blocks (below the diagonal of a symmetric matrix), with
+    /// their columns: each block is its mirror's, for a product to read transposed. A
+    /// product adds these first, then [`Self::own_blocks`].
+    #[inline(always)]
+    fn mirrored_blocks(&self, i: usize) -> impl Iterator<Item = (&Matrix3<T>, usize)> {
+        let (start, own) = (self.pattern.range(i).start, self.own[i] as usize);
+        self.value[start..own]
+            .iter()
+            .zip(&self.pattern.items[start..own])
+            .map(|(&v, &col)| (&self.values[v as usize], col as usize))
+    }
+
+    /// Row `i`'s own blocks, stored in a run, with their columns.
+    #[inline(always)]
+    fn own_blocks(&self, i: usize) -> impl Iterator<Item = (&Matrix3<T>, usize)> {
+        let (end, own) = (self.pattern.range(i).end, self.own[i] as usize);
+        let start = self.value[own] as usize;
+        self.values[start..start + (end - own)]
+            .iter()
+            .zip(&self.pattern.items[own..end])
+            .map(|(block, &col)| (block, col as usize))
     }
 }
 
@@ -473,19 +488,13 @@ mod simd {
                 y,
             } = self;
             let avx = simd.avx;
-            let cols = &a.pattern.items;
             for (i, yi) in (first..).zip(y) {
-                let range = a.pattern.range(i);
-                let own = a.own[i] as usize;
                 let mut sum = avx._mm256_setzero_pd();
-                let mirrors = a.value[range.start..own]
-                    .iter()
-                    .zip(&cols[range.start..own]);
-                for (&v, &col) in mirrors {
+                for (block, col) in a.mirrored_blocks(i) {
                     // Bᵀ x: lane k of pⱼ = c_j x is b[3j + k] xₖ; transposed into t₀, t₁, t₂,
                     // lane j of (t₀ + t₁) + t₂ is row j of Bᵀ x summed left to right.
-                    let [c0, c1, c2] = columns(simd, &a.values[v as usize]);
-                    let xj = &x[col as usize];
+                    let [c0, c1, c2] = columns(simd, block);
+                    let xj = &x[col];
                     let xv = avx._mm256_set_pd(0.0, xj[2], xj[1], xj[0]);
                     let p0 = avx._mm256_mul_pd(c0, xv);
                     let p1 = avx._mm256_mul_pd(c1, xv);
@@ -504,12 +513,10 @@ mod simd {
                     let t = avx._mm256_add_pd(avx._mm256_add_pd(t0, t1), t2);
                     sum = avx._mm256_add_pd(sum, t);
                 }
-                let start = a.value[own] as usize;
-                let stored = &a.values[start..start + (range.end - own)];
-                for (block, &col) in stored.iter().zip(&cols[own..range.end]) {
+                for (block, col) in a.own_blocks(i) {
                     // B x: column j times xⱼ, added left to right.
                     let [c0, c1, c2] = columns(simd, block);
-                    let xj = &x[col as usize];
+                    let xj = &x[col];
                     let t = avx._mm256_mul_pd(c0, avx._mm256_broadcast_sd(&xj[0]));
                     let t = avx
                         ._mm256_add_pd(t, avx._mm256_mul_pd(c1, avx._mm256_broadcast_sd(&xj[1])));
