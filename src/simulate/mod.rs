@@ -602,7 +602,7 @@ fn output_pool() -> Result<rayon::ThreadPool> {
 /// than a frame: the simulation waits for it then (the frames go through a channel of one),
 /// and the output thread, then the only one of the process with work, runs at full speed.
 /// Where the system shares the cores fairly between processes or their control groups first
-/// (Linux's autogroups, one a session, the cgroups of systemd and of farm schedulers), the
+/// (Linux's autogroups, one per `setsid`, the cgroups of systemd and of farm schedulers), the
 /// priority counts only against the threads of the process's own group, and jobs elsewhere
 /// on a shared machine cannot starve it. A busy job started from the same shell is in that
 /// group: the output thread then runs only while the simulation waits for it, and the
