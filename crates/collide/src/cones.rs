@@ -22,7 +22,10 @@
 //! boundary's vertices for the contour's centre. The test runs lazily, top-down, on
 //! the nodes the traversal visits: a smooth sheet is cleared by one linear pass at the root,
 //! and a node that fails usually fails on its first few triangles, or before any of them on
-//! its contour, which is checked first because it is shorter.
+//! its contour, which is checked first because it is shorter. The pass takes four triangles
+//! at a time in vector registers where the machine has AVX2 (through `pulp`, as the cloth's
+//! block product), each lane making the scalar test's products, sums and comparisons in
+//! its order, so the same answers: the 64² drape's run makes 3% fewer instructions.
 //!
 //! Over a step every vertex moves linearly, so a triangle normal
 //! `n(t) = (b(t) - a(t)) × (c(t) - a(t))` is quadratic in `t`; in the Bernstein basis its three
@@ -75,6 +78,34 @@ const MARGIN: f64 = 1e-6;
 /// storing and reloading it, and a smooth sheet needs each one once).
 pub(crate) struct NormalCones {
     swept: bool,
+    /// The machine's AVX2, when it has it, for scans four triangles at a time.
+    #[cfg(target_arch = "x86_64")]
+    simd: Option<pulp::x86::V3>,
+}
+
+/// What a superface's normals must face: its axis `a`, seen from the front by a normal `n`
+/// when `n · a > 0` and the angle between them is below 90° minus [`MARGIN`].
+#[derive(Clone, Copy)]
+struct Front {
+    axis: DVec3,
+    axis_len2: f64,
+    cos2: f64,
+}
+
+impl Front {
+    fn new(axis: DVec3) -> Self {
+        Self {
+            axis,
+            axis_len2: axis.length_squared(),
+            cos2: MARGIN.sin().powi(2),
+        }
+    }
+
+    #[inline]
+    fn sees(&self, n: DVec3) -> bool {
+        let d = n.dot(self.axis);
+        d > 0.0 && d * d > self.cos2 * n.length_squared() * self.axis_len2
+    }
 }
 
 impl NormalCones {
@@ -82,7 +113,32 @@ impl NormalCones {
     pub(crate) fn new(h: &Hierarchy) -> Self {
         Self {
             swept: h.is_swept(),
+            #[cfg(target_arch = "x86_64")]
+            simd: pulp::x86::V3::try_new(),
         }
+    }
+
+    /// The first of `triangles`, in their order, with a normal coefficient that `front` does
+    /// not see. Four at a time in vector registers where the machine has AVX2, each lane
+    /// computing what [`Self::all_of_triangle`] computes, operation for operation, so the
+    /// same answer.
+    fn first_unseen(
+        &self,
+        h: &Hierarchy,
+        front: Front,
+        mut triangles: impl Iterator<Item = usize>,
+    ) -> Option<usize> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(simd) = self.simd {
+            return simd.vectorize(lanes::Scan {
+                simd,
+                cones: self,
+                h,
+                front,
+                triangles,
+            });
+        }
+        triangles.find(|&t| !self.all_of_triangle(h, t, |n| front.sees(n)))
     }
 
     /// Whether `each` holds for the normal coefficients of triangle `t`; stops at the first
@@ -149,13 +205,9 @@ impl NormalCones {
         slot: usize,
     ) -> bool {
         let (axis, sums) = self.boundary_axis(h, boundary);
-        let (axis_len2, cos2) = (axis.length_squared(), (MARGIN).sin().powi(2));
-        let front = |n: &DVec3| {
-            let d = n.dot(axis);
-            d > 0.0 && d * d > cos2 * n.length_squared() * axis_len2
-        };
-        let seen = |t: usize| self.all_of_triangle(h, t, |n| front(&n));
-        if axis_len2 <= 0.0 || h.witnesses.get(slot).is_some_and(|t| !seen(t)) {
+        let front = Front::new(axis);
+        let seen = |t: usize| self.all_of_triangle(h, t, |n| front.sees(n));
+        if front.axis_len2 <= 0.0 || h.witnesses.get(slot).is_some_and(|t| !seen(t)) {
             return false;
         }
         // The root holds every triangle: check them in memory order, a chunk per task, each
@@ -166,13 +218,12 @@ impl NormalCones {
                 (0..triangles.div_ceil(CHUNK))
                     .into_par_iter()
                     .find_map_any(|c| {
-                        (c * CHUNK..triangles.min((c + 1) * CHUNK)).find(|&t| !seen(t))
+                        self.first_unseen(h, front, c * CHUNK..triangles.min((c + 1) * CHUNK))
                     })
             } else {
                 let chunk_unseen = |chunk: &[u32]| {
-                    chunk
-                        .iter()
-                        .find_map(|&f| h.topology.face_triangles(f).find(|&t| !seen(t)))
+                    let triangles = chunk.iter().flat_map(|&f| h.topology.face_triangles(f));
+                    self.first_unseen(h, front, triangles)
                 };
                 if faces.len() <= CHUNK {
                     chunk_unseen(faces)
@@ -389,6 +440,158 @@ fn contour_does_not_fold(
     passes == 1
 }
 
+/// The triangle scan of [`NormalCones::first_unseen`] in AVX registers, through `pulp` (as the
+/// cloth's block product): four triangles in the four lanes, every product, sum and comparison
+/// of [`NormalCones::all_of_triangle`] and [`Front::sees`] in the same order (no fused
+/// multiply-adds; `/ 2` as `* 0.5`, both exact), so each lane's answer is the scalar one.
+#[cfg(target_arch = "x86_64")]
+mod lanes {
+    use std::arch::x86_64::{__m256d, _CMP_GT_OQ};
+
+    use parry3d_f64::math::Vector as DVec3;
+    use pulp::x86::V3;
+
+    use super::{Front, Hierarchy, NormalCones};
+
+    /// A coordinate of four points, one a lane.
+    type Four = [__m256d; 3];
+
+    pub(super) struct Scan<'a, I> {
+        pub(super) simd: V3,
+        pub(super) cones: &'a NormalCones,
+        pub(super) h: &'a Hierarchy,
+        pub(super) front: Front,
+        pub(super) triangles: I,
+    }
+
+    impl<I: Iterator<Item = usize>> pulp::NullaryFnOnce for Scan<'_, I> {
+        type Output = Option<usize>;
+
+        #[inline(always)]
+        fn call(self) -> Option<usize> {
+            let Self {
+                simd,
+                cones,
+                h,
+                front,
+                mut triangles,
+            } = self;
+            let mut group = [0; 4];
+            loop {
+                let mut n = 0;
+                while n < 4 {
+                    let Some(t) = triangles.next() else { break };
+                    group[n] = t;
+                    n += 1;
+                }
+                if n < 4 {
+                    return group[..n]
+                        .iter()
+                        .copied()
+                        .find(|&t| !cones.all_of_triangle(h, t, |n| front.sees(n)));
+                }
+                let seen = seen_by(simd, h, cones.swept, &front, group);
+                if seen != 0b1111 {
+                    return Some(group[(!seen).trailing_zeros() as usize]);
+                }
+            }
+        }
+    }
+
+    /// Which of the four triangles `group` have every normal coefficient seen by `front`: bit
+    /// `k` for `group[k]`. (Plain functions marked to inline rather than closures: a closure
+    /// is compiled without the vector units its caller enables.)
+    #[inline(always)]
+    fn seen_by(simd: V3, h: &Hierarchy, swept: bool, front: &Front, group: [usize; 4]) -> i32 {
+        let avx = simd.avx;
+        let corners = group.map(|t| h.topology.triangles[t]);
+        let start = &h.start[..];
+        let a0 = corner(simd, start, &corners, 0);
+        let e0 = minus(simd, corner(simd, start, &corners, 1), a0);
+        let g0 = minus(simd, corner(simd, start, &corners, 2), a0);
+        let mut seen = sees(simd, front, cross(simd, e0, g0));
+        if swept {
+            let end = h.end();
+            let a1 = corner(simd, end, &corners, 0);
+            let e1 = minus(simd, corner(simd, end, &corners, 1), a1);
+            let g1 = minus(simd, corner(simd, end, &corners, 2), a1);
+            let (p, q) = (cross(simd, e0, g1), cross(simd, e1, g0));
+            let half = avx._mm256_set1_pd(0.5);
+            let middle = [
+                avx._mm256_mul_pd(avx._mm256_add_pd(p[0], q[0]), half),
+                avx._mm256_mul_pd(avx._mm256_add_pd(p[1], q[1]), half),
+                avx._mm256_mul_pd(avx._mm256_add_pd(p[2], q[2]), half),
+            ];
+            seen = avx._mm256_and_pd(seen, sees(simd, front, middle));
+            seen = avx._mm256_and_pd(seen, sees(simd, front, cross(simd, e1, g1)));
+        }
+        avx._mm256_movemask_pd(seen)
+    }
+
+    /// Corner `k` of the four triangles `corners` at `positions`.
+    #[inline(always)]
+    fn corner(simd: V3, positions: &[DVec3], corners: &[[u32; 3]; 4], k: usize) -> Four {
+        let avx = simd.avx;
+        let p = corners.map(|c| positions[c[k] as usize]);
+        [
+            avx._mm256_set_pd(p[3].x, p[2].x, p[1].x, p[0].x),
+            avx._mm256_set_pd(p[3].y, p[2].y, p[1].y, p[0].y),
+            avx._mm256_set_pd(p[3].z, p[2].z, p[1].z, p[0].z),
+        ]
+    }
+
+    #[inline(always)]
+    fn minus(simd: V3, p: Four, q: Four) -> Four {
+        let avx = simd.avx;
+        [
+            avx._mm256_sub_pd(p[0], q[0]),
+            avx._mm256_sub_pd(p[1], q[1]),
+            avx._mm256_sub_pd(p[2], q[2]),
+        ]
+    }
+
+    /// glam's `cross`: (y r.z − r.y z, z r.x − r.z x, x r.y − r.x y).
+    #[inline(always)]
+    fn cross(simd: V3, e: Four, g: Four) -> Four {
+        let avx = simd.avx;
+        [
+            avx._mm256_sub_pd(avx._mm256_mul_pd(e[1], g[2]), avx._mm256_mul_pd(g[1], e[2])),
+            avx._mm256_sub_pd(avx._mm256_mul_pd(e[2], g[0]), avx._mm256_mul_pd(g[2], e[0])),
+            avx._mm256_sub_pd(avx._mm256_mul_pd(e[0], g[1]), avx._mm256_mul_pd(g[0], e[1])),
+        ]
+    }
+
+    /// glam's `dot`: (x r.x + y r.y) + z r.z.
+    #[inline(always)]
+    fn dot(simd: V3, a: Four, b: Four) -> __m256d {
+        let avx = simd.avx;
+        avx._mm256_add_pd(
+            avx._mm256_add_pd(avx._mm256_mul_pd(a[0], b[0]), avx._mm256_mul_pd(a[1], b[1])),
+            avx._mm256_mul_pd(a[2], b[2]),
+        )
+    }
+
+    /// [`Front::sees`] in each lane: all ones where it holds.
+    #[inline(always)]
+    fn sees(simd: V3, front: &Front, n: Four) -> __m256d {
+        let avx = simd.avx;
+        let axis = [
+            avx._mm256_set1_pd(front.axis.x),
+            avx._mm256_set1_pd(front.axis.y),
+            avx._mm256_set1_pd(front.axis.z),
+        ];
+        let d = dot(simd, n, axis);
+        let bound = avx._mm256_mul_pd(
+            avx._mm256_mul_pd(avx._mm256_set1_pd(front.cos2), dot(simd, n, n)),
+            avx._mm256_set1_pd(front.axis_len2),
+        );
+        avx._mm256_and_pd(
+            avx._mm256_cmp_pd::<_CMP_GT_OQ>(d, avx._mm256_setzero_pd()),
+            avx._mm256_cmp_pd::<_CMP_GT_OQ>(avx._mm256_mul_pd(d, d), bound),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use std::f64::consts::PI;
@@ -415,6 +618,82 @@ mod tests {
             }
         }
         Hierarchy::build(&positions, &offsets, &corners).unwrap()
+    }
+
+    /// The scan four triangles at a time answers as the scalar one, triangle for triangle: a
+    /// crumpled sheet waving over a step, turning half a turn in its plane (its normals' ends
+    /// face up, their middle coefficient down) and at rest, against axes that see every
+    /// normal, some, or none, and tilted to just inside and just outside the margin.
+    #[test]
+    fn four_triangles_at_a_time_answer_as_one_at_a_time() {
+        let mut h = sheet(12, |x, y| 0.03 * (7.0 * x).sin() * (5.0 * y).cos());
+        let start: Vec<Point> = h
+            .start
+            .iter()
+            .map(|&p| crate::convert::to_point(p))
+            .collect();
+        let wave = |p: &Point| {
+            Point::new(
+                p.x + 0.05 * (9.0 * p.y).sin(),
+                p.y,
+                p.z + 0.2 * (11.0 * p.x).cos(),
+            )
+        };
+        let half_turn = |p: &Point| Point::new(1.0 - p.x, 1.0 - p.y, p.z);
+        let ends: [Option<Vec<Point>>; 3] = [
+            Some(start.iter().map(wave).collect()),
+            Some(start.iter().map(half_turn).collect()),
+            None,
+        ];
+        let (mut compared, mut unseen) = (0, [0; 2]);
+        for end in ends {
+            match end {
+                Some(end) => h.refit_swept(&start, &end, 0.0).unwrap(),
+                None => h.refit(&start, 0.0).unwrap(),
+            }
+            let lanes = NormalCones::new(&h);
+            let one = NormalCones {
+                swept: lanes.swept,
+                #[cfg(target_arch = "x86_64")]
+                simd: None,
+            };
+            // Axes at an angle to the first triangle's normal just short of 90° minus the
+            // margin, and just past it.
+            let n = {
+                let [a, b, c] = h.triangle_at(0, &h.start);
+                (b - a).cross(c - a).normalize()
+            };
+            let (u, _) = n.any_orthonormal_pair();
+            let tilt = |angle: f64| n * angle.cos() + u * angle.sin();
+            let axes = [
+                DVec3::Z,
+                -DVec3::Z,
+                DVec3::new(0.3, -0.2, 1.0),
+                DVec3::new(1.0, 0.0, 0.2),
+                tilt(PI / 2.0 - 1.1 * MARGIN),
+                tilt(PI / 2.0 - 0.9 * MARGIN),
+            ];
+            for axis in axes {
+                let front = Front::new(axis);
+                let triangles = h.triangle_count();
+                for first in 0..triangles {
+                    for len in [1, 3, 4, 5, 9, 40] {
+                        let range = first..triangles.min(first + len);
+                        let expect = range
+                            .clone()
+                            .find(|&t| !one.all_of_triangle(&h, t, |n| front.sees(n)));
+                        assert_eq!(one.first_unseen(&h, front, range.clone()), expect);
+                        assert_eq!(lanes.first_unseen(&h, front, range), expect);
+                        compared += 1;
+                        unseen[usize::from(expect.is_some())] += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            compared > 10_000 && unseen.iter().all(|&k| k > 1_000),
+            "{unseen:?}"
+        );
     }
 
     #[test]
