@@ -186,10 +186,16 @@ impl Topology {
         &self.owned_edges[range]
     }
 
-    /// Whether two faces share at least one vertex.
+    /// Whether two faces share at least one vertex. Two quads, the common case, compare all
+    /// sixteen corner pairs without a branch.
     pub(crate) fn faces_share_vertex(&self, f: u32, g: u32) -> bool {
-        let other = self.face(g);
-        self.face(f).iter().any(|v| other.contains(v))
+        let (face, other) = (self.face(f), self.face(g));
+        if let (Ok(a), Ok(b)) = (<&[u32; 4]>::try_from(face), <&[u32; 4]>::try_from(other)) {
+            return a.iter().fold(false, |shared, v| {
+                shared | b.iter().fold(false, |s, w| s | (v == w))
+            });
+        }
+        face.iter().any(|v| other.contains(v))
     }
 }
 
@@ -313,6 +319,36 @@ mod tests {
         assert_eq!(t.owned_vertices(0), &[0, 1, 2, 3]);
         assert_eq!(t.owned_vertices(1), &[4, 5, 6]);
         assert!(t.faces_share_vertex(0, 1));
+    }
+
+    /// Every pair of faces of a 4 × 4 grid of quads with a triangle and a pentagon beside it
+    /// shares a vertex exactly when their corner sets meet: quads against quads, quads against
+    /// the others, each way round, a face against itself.
+    #[test]
+    fn faces_share_a_vertex_exactly_when_their_corners_meet() {
+        let (mut offsets, mut corners) = (vec![0], Vec::new());
+        for j in 0..4u32 {
+            for i in 0..4 {
+                let v = j * 5 + i;
+                corners.extend([v, v + 1, v + 6, v + 5]);
+                offsets.push(corners.len() as u32);
+            }
+        }
+        corners.extend([4, 25, 9]);
+        offsets.push(corners.len() as u32);
+        corners.extend([9, 25, 26, 27, 14]);
+        offsets.push(corners.len() as u32);
+        let t = Topology::new(28, &offsets, &corners).unwrap();
+        let faces = offsets.len() as u32 - 1;
+        let mut shared = 0;
+        for f in 0..faces {
+            for g in 0..faces {
+                let expect = t.face(f).iter().any(|v| t.face(g).contains(v));
+                assert_eq!(t.faces_share_vertex(f, g), expect, "faces {f} and {g}");
+                shared += usize::from(expect);
+            }
+        }
+        assert!(shared > 100 && shared < (faces * faces) as usize);
     }
 
     #[test]
