@@ -54,6 +54,15 @@ pub fn segments_closest_points(first: [Point; 2], second: [Point; 2]) -> ([f64; 
     ([s, u], distance)
 }
 
+/// Whether `edge` has an end among the corners of `face`; a quad, the common case, compares
+/// its four corners with both ends without a branch.
+fn touches(face: &[u32], [p, q]: [u32; 2]) -> bool {
+    match <&[u32; 4]>::try_from(face) {
+        Ok(quad) => quad.iter().fold(false, |hit, &v| hit | (v == p) | (v == q)),
+        Err(_) => face.contains(&p) || face.contains(&q),
+    }
+}
+
 impl Hierarchy {
     /// The unique undirected edges of the fan triangles, as `[low, high]` vertex pairs, sorted.
     #[must_use]
@@ -93,7 +102,7 @@ impl Hierarchy {
         // An edge with an end on the other face lies on a face around that end, as the other
         // edge lies on the other face: such pairs, and so every pair within one face, are
         // skipped before their geometry is looked at.
-        let off = |e: u32, face: &[u32]| !edges[e as usize].iter().any(|v| face.contains(v));
+        let off = |e: u32, face: &[u32]| !touches(face, edges[e as usize]);
         let visit = |a: u32, b: u32, out: &mut Vec<EdgeProximity>| {
             if a == b {
                 return;
@@ -101,8 +110,25 @@ impl Hierarchy {
             let (f, g) = (a.min(b), a.max(b));
             let (face_f, face_g) = (self.topology.face(f), self.topology.face(g));
             let (mine, theirs) = (self.topology.owned_edges(f), self.topology.owned_edges(g));
+            // Which of `theirs` have no end on `f`, a bit each, found once for the pair when
+            // one of `mine` is to be tested (past the 64th, asked edge by edge).
+            let mut theirs_off = None;
             for &e in mine.iter().filter(|&&e| off(e, face_g)) {
-                for &o in theirs.iter().filter(|&&o| off(o, face_f)) {
+                let bits: u64 = *theirs_off.get_or_insert_with(|| {
+                    theirs
+                        .iter()
+                        .take(64)
+                        .enumerate()
+                        .fold(0, |bits, (k, &o)| bits | u64::from(off(o, face_f)) << k)
+                });
+                let kept = |k: usize, o: u32| {
+                    if k < 64 {
+                        bits >> k & 1 == 1
+                    } else {
+                        off(o, face_f)
+                    }
+                };
+                for (_, &o) in theirs.iter().enumerate().filter(|&(k, &o)| kept(k, o)) {
                     let (e, o) = (e.min(o), e.max(o));
                     if let Some(near) = self.edges_near(e, o, distance)
                         && !self.edges_around(e, o, skip, users)

@@ -956,7 +956,10 @@ fn brute_edge_proximity(
 #[test]
 fn edge_proximity_matches_brute_force() {
     let mut found_any = false;
-    for (name, m) in meshes() {
+    // Beside the usual meshes, 42-gons, each owning more than 64 edges (sides and fan
+    // diagonals), past what a face pair's bit set of edges holds.
+    let wide = ngon_sheet(3, 2, 20, |x, y| 0.2 * (3.0 * x).sin() * y);
+    for (name, m) in meshes().into_iter().chain([("wide ngons", wide)]) {
         assert_eq!(build(&m).edges(), unique_edges(&m).as_slice(), "{name}");
         let mut h = build(&m);
         let tables = [LocalFaces::default(), h.local_faces(0.1).unwrap()];
