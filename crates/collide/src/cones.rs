@@ -321,16 +321,21 @@ impl<'a> Stars<'a> {
         }
     }
 
-    /// Whether faces `f` and `g` cannot touch because the star of a vertex they share is
-    /// cleared; `false` for faces that share none.
-    pub(crate) fn part(&self, f: u32, g: u32) -> bool {
+    /// For faces `f` and `g` that share a vertex, whether they cannot touch because the star
+    /// of one they share is cleared (the shared corners tried in `f`'s order); `None` for
+    /// faces that share none.
+    pub(crate) fn part(&self, f: u32, g: u32) -> Option<bool> {
         let other = self.h.topology.face(g);
-        self.h
-            .topology
-            .face(f)
-            .iter()
-            .filter(|v| other.contains(v))
-            .any(|&v| self.cleared(v))
+        let mut shared = false;
+        for &v in self.h.topology.face(f) {
+            if other.contains(&v) {
+                if self.cleared(v) {
+                    return Some(true);
+                }
+                shared = true;
+            }
+        }
+        shared.then_some(false)
     }
 
     /// Whether the star of `v` is cleared. The answer is a function of the positions alone,

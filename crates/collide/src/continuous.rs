@@ -145,7 +145,13 @@ impl Hierarchy {
         let stars = Stars::new(self, &cones);
         let visit = |a: u32, b: u32, out: &mut Vec<Found>| {
             let (f, g) = (a.min(b), a.max(b));
-            if f != g && (stars.part(f, g) || self.faces_stay_apart(f, g)) {
+            // Faces sharing a vertex are parted by a cleared star around one they share;
+            // faces sharing none, when they stay apart.
+            if f != g
+                && stars
+                    .part(f, g)
+                    .unwrap_or_else(|| self.faces_stay_apart(f, g))
+            {
                 return;
             }
             vertices_against_face(self, f, self, g, true, Found::VertexTriangle, out);
@@ -157,14 +163,11 @@ impl Hierarchy {
         self_pairs(self, Some(&cones), true, 0.0, dirty, &visit)
     }
 
-    /// Whether faces `f` and `g`, sharing no corner, stay apart over the step
+    /// Whether faces `f` and `g`, which share no corner, stay apart over the step
     /// ([`faces_apart`]); faces of more than [`FACE_CORNERS`] corners are left to the tests.
     fn faces_stay_apart(&self, f: u32, g: u32) -> bool {
         let (a, b) = (self.topology.face(f), self.topology.face(g));
-        if a.len() > FACE_CORNERS
-            || b.len() > FACE_CORNERS
-            || self.topology.faces_share_vertex(f, g)
-        {
+        if a.len() > FACE_CORNERS || b.len() > FACE_CORNERS {
             return false;
         }
         let mut corners = [[DVec3::ZERO; 2]; 2 * FACE_CORNERS];
