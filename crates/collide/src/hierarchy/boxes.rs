@@ -105,6 +105,25 @@ impl Fit<'_> {
         outward(lo - pad, hi + pad)
     }
 
+    /// The boxes of vertices `first..first + out.len()` into `out`, each as [`Fit::vertex`]
+    /// makes it: in AVX registers where the machine has them (through `pulp`, as the normal
+    /// cones' scans), a vertex's three coordinates in three lanes, every operation of
+    /// [`outward`] in its order, so the same bits.
+    fn vertices_into(&self, first: usize, out: &mut [SmallBox]) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(simd) = pulp::x86::V3::try_new() {
+            return simd.vectorize(lanes::VertexBoxes {
+                simd,
+                fit: self,
+                first,
+                out,
+            });
+        }
+        for (v, b) in (first..).zip(out) {
+            *b = self.vertex(v);
+        }
+    }
+
     /// The box of face `f`: the union of its corners' `vertices` boxes, loosened by
     /// [`Fit::relative`].
     #[inline]
@@ -171,15 +190,14 @@ impl Boxes {
     /// level `k` being `level_offsets[k]..level_offsets[k + 1]`.
     pub(crate) fn refit(&mut self, level_offsets: &[u32], fit: &Fit<'_>) {
         let count = fit.start.len();
+        self.vertices.resize(count, EMPTY);
         if count < PARALLEL_LEVEL {
-            self.vertices.clear();
-            self.vertices.extend((0..count).map(|v| fit.vertex(v)));
+            fit.vertices_into(0, &mut self.vertices);
         } else {
-            (0..count)
-                .into_par_iter()
-                .with_min_len(REFIT_RUN)
-                .map(|v| fit.vertex(v))
-                .collect_into_vec(&mut self.vertices);
+            self.vertices
+                .par_chunks_mut(REFIT_RUN)
+                .enumerate()
+                .for_each(|(c, out)| fit.vertices_into(c * REFIT_RUN, out));
         }
         let vertices = &self.vertices[..];
         let face_box = |f: usize| fit.face(vertices, f);
@@ -452,6 +470,94 @@ impl Boxes {
     }
 }
 
+/// [`Fit::vertices_into`] in AVX registers.
+#[cfg(target_arch = "x86_64")]
+mod lanes {
+    use std::arch::x86_64::{__m256d, _CMP_GT_OQ, _CMP_LT_OQ};
+
+    use parry3d_f64::math::Vector as DVec3;
+    use pulp::x86::V3;
+
+    use super::{Fit, SmallBox};
+
+    pub(super) struct VertexBoxes<'a, 'b> {
+        pub(super) simd: V3,
+        pub(super) fit: &'a Fit<'b>,
+        pub(super) first: usize,
+        pub(super) out: &'a mut [SmallBox],
+    }
+
+    impl pulp::NullaryFnOnce for VertexBoxes<'_, '_> {
+        type Output = ();
+
+        #[inline(always)]
+        fn call(self) {
+            let Self {
+                simd,
+                fit,
+                first,
+                out,
+            } = self;
+            let avx = simd.avx;
+            let pad = avx._mm256_set1_pd(fit.margin);
+            for (v, b) in (first..).zip(out) {
+                let p = lanes(simd, fit.start[v]);
+                let (lo, hi) = match fit.end {
+                    Some(end) => {
+                        let q = lanes(simd, end[v]);
+                        (avx._mm256_min_pd(p, q), avx._mm256_max_pd(p, q))
+                    }
+                    None => (p, p),
+                };
+                let lo: [f32; 4] = pulp::cast(rounded::<false>(simd, avx._mm256_sub_pd(lo, pad)));
+                let hi: [f32; 4] = pulp::cast(rounded::<true>(simd, avx._mm256_add_pd(hi, pad)));
+                *b = [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]];
+            }
+        }
+    }
+
+    /// `p` in lanes 0–2 (lane 3 zero).
+    #[inline(always)]
+    fn lanes(simd: V3, p: DVec3) -> __m256d {
+        simd.avx._mm256_set_pd(0.0, p.z, p.y, p.x)
+    }
+
+    /// `|x| ε + tiny` in each lane, what [`super::outward`] moves a value by.
+    #[inline(always)]
+    fn nudge(simd: V3, x: __m256d) -> __m256d {
+        let avx = simd.avx;
+        let magnitude = avx._mm256_andnot_pd(avx._mm256_set1_pd(-0.0), x);
+        avx._mm256_mul_pd(magnitude, avx._mm256_set1_pd(f64::from(f32::EPSILON)))
+    }
+
+    /// [`super::outward`]'s `down` (`UP` false) or `up` in each lane.
+    #[inline(always)]
+    fn rounded<const UP: bool>(simd: V3, x: __m256d) -> std::arch::x86_64::__m128 {
+        let avx = simd.avx;
+        let tiny = avx._mm256_set1_pd(super::TINY);
+        let (y, limit) = if UP {
+            let y = avx._mm256_add_pd(avx._mm256_add_pd(x, nudge(simd, x)), tiny);
+            (y, -super::BIG)
+        } else {
+            let y = avx._mm256_sub_pd(avx._mm256_sub_pd(x, nudge(simd, x)), tiny);
+            (y, super::BIG)
+        };
+        let limit = avx._mm256_set1_pd(limit);
+        let inside = if UP {
+            avx._mm256_cmp_pd::<_CMP_GT_OQ>(y, limit)
+        } else {
+            avx._mm256_cmp_pd::<_CMP_LT_OQ>(y, limit)
+        };
+        avx._mm256_cvtpd_ps(avx._mm256_blendv_pd(limit, y, inside))
+    }
+}
+
+/// More than half the smallest `f32` subnormal (1.4e-45), the most that rounding to nearest
+/// moves a value that small: [`outward`]'s slack beyond the relative one.
+const TINY: f64 = 2e-45;
+/// The largest finite `f32`.
+const BIG: f64 = f32::MAX as f64;
+
 /// `lo..hi` rounded outward to single precision.
 ///
 /// Rounding to nearest moves a value by at most half a unit in the last place of `f32`, at
@@ -460,8 +566,6 @@ impl Boxes {
 /// the range of `f32` go to its largest finite values or to infinity, still on the safe side.
 fn outward(lo: DVec3, hi: DVec3) -> SmallBox {
     const EPS: f64 = f32::EPSILON as f64;
-    const TINY: f64 = 2e-45;
-    const BIG: f64 = f32::MAX as f64;
     let down = |x: f64| {
         let y = x - x.abs() * EPS - TINY;
         (if y < BIG { y } else { BIG }) as f32
@@ -511,6 +615,49 @@ fn distance2(b: &SmallBox, q: DVec3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The vertex boxes in vector registers are [`Fit::vertex`]'s to the bit, static and
+    /// swept, with and without a margin, for coordinates of either sign from subnormal to
+    /// beyond the range of `f32`, zeros of both signs included.
+    #[test]
+    fn vertex_boxes_in_lanes_are_the_scalar_ones() {
+        let values = [
+            0.0,
+            -0.0,
+            0.1,
+            -0.1,
+            1e-40,
+            -1e-310,
+            3.4e38,
+            -3.5e38,
+            1e300,
+            123_456.789,
+            7e-3,
+        ];
+        let at = |k: usize| values[k % values.len()];
+        let start: Vec<DVec3> = (0..97)
+            .map(|k| DVec3::new(at(k), at(3 * k + 1), at(7 * k + 2)))
+            .collect();
+        let end: Vec<DVec3> = (0..97)
+            .map(|k| DVec3::new(at(5 * k + 3), at(k + 4), -at(2 * k)))
+            .collect();
+        let bits = |b: &SmallBox| b.map(f32::to_bits);
+        for (swept, margin) in [(false, 0.0), (false, 1e-3), (true, 0.0), (true, 2.5e-3)] {
+            let fit = Fit {
+                face_offsets: &[],
+                face_vertices: &[],
+                start: &start,
+                end: swept.then_some(&end[..]),
+                margin,
+                relative: 0.0,
+            };
+            let mut out = vec![EMPTY; start.len() - 5];
+            fit.vertices_into(5, &mut out);
+            for (k, b) in out.iter().enumerate() {
+                assert_eq!(bits(b), bits(&fit.vertex(5 + k)), "vertex {}", 5 + k);
+            }
+        }
+    }
 
     #[test]
     fn outward_rounding_contains_the_box() {
