@@ -555,7 +555,7 @@ mod lanes {
                     return group[..n]
                         .iter()
                         .copied()
-                        .find(|&t| !cones.all_of_triangle(h, t, |n| front.sees(n)));
+                        .find(|&t| !cones.all_of_triangle(h, t, |normal| front.sees(normal)));
                 }
                 let seen = seen_by(simd, h, cones.swept, &front, group);
                 if seen != 0b1111 {
@@ -690,19 +690,19 @@ mod lanes {
                     [avx._mm256_set1_pd(c1[0]), avx._mm256_set1_pd(c1[1])],
                 ],
             };
+            let (start, swept) = (&h.start[..], h.is_swept());
             let mut passes = 0;
             for four in edges.chunks_exact(4) {
                 let (p, q) = (
                     [four[0][0], four[1][0], four[2][0], four[3][0]],
                     [four[0][1], four[1][1], four[2][1], four[3][1]],
                 );
-                let start = &h.start[..];
                 let (p0, q0) = (
                     relative(simd, &plane, points(simd, start, p), 0),
                     relative(simd, &plane, points(simd, start, q), 0),
                 );
                 let mut backward = avx._mm256_cmp_pd::<_CMP_LE_OQ>(turn(simd, p0, q0), zero);
-                if h.is_swept() {
+                if swept {
                     let end = h.end();
                     let (p1, q1) = (
                         relative(simd, &plane, points(simd, end, p), 1),

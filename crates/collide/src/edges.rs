@@ -128,7 +128,8 @@ impl Hierarchy {
                         off(o, face_f)
                     }
                 };
-                for (_, &o) in theirs.iter().enumerate().filter(|&(k, &o)| kept(k, o)) {
+                let others = theirs.iter().enumerate().filter(|&(k, &o)| kept(k, o));
+                for (_, &o) in others {
                     let (e, o) = (e.min(o), e.max(o));
                     if let Some(near) = self.edges_near(e, o, distance)
                         && !self.edges_around(e, o, skip, users)

@@ -501,10 +501,10 @@ mod lanes {
             let avx = simd.avx;
             let pad = avx._mm256_set1_pd(fit.margin);
             for (v, b) in (first..).zip(out) {
-                let p = lanes(simd, fit.start[v]);
+                let p = coordinates(simd, fit.start[v]);
                 let (lo, hi) = match fit.end {
                     Some(end) => {
-                        let q = lanes(simd, end[v]);
+                        let q = coordinates(simd, end[v]);
                         (avx._mm256_min_pd(p, q), avx._mm256_max_pd(p, q))
                     }
                     None => (p, p),
@@ -518,7 +518,7 @@ mod lanes {
 
     /// `p` in lanes 0–2 (lane 3 zero).
     #[inline(always)]
-    fn lanes(simd: V3, p: DVec3) -> __m256d {
+    fn coordinates(simd: V3, p: DVec3) -> __m256d {
         simd.avx._mm256_set_pd(0.0, p.z, p.y, p.x)
     }
 
@@ -527,7 +527,7 @@ mod lanes {
     fn nudge(simd: V3, x: __m256d) -> __m256d {
         let avx = simd.avx;
         let magnitude = avx._mm256_andnot_pd(avx._mm256_set1_pd(-0.0), x);
-        avx._mm256_mul_pd(magnitude, avx._mm256_set1_pd(f64::from(f32::EPSILON)))
+        avx._mm256_mul_pd(magnitude, avx._mm256_set1_pd(super::EPS))
     }
 
     /// [`super::outward`]'s `down` (`UP` false) or `up` in each lane.
@@ -552,6 +552,8 @@ mod lanes {
     }
 }
 
+/// [`outward`]'s relative slack: a unit in the last place of `f32`, relative.
+const EPS: f64 = f32::EPSILON as f64;
 /// More than half the smallest `f32` subnormal (1.4e-45), the most that rounding to nearest
 /// moves a value that small: [`outward`]'s slack beyond the relative one.
 const TINY: f64 = 2e-45;
@@ -565,7 +567,6 @@ const BIG: f64 = f32::MAX as f64;
 /// subnormal first leaves the rounded value on the safe side, without branches. Values beyond
 /// the range of `f32` go to its largest finite values or to infinity, still on the safe side.
 fn outward(lo: DVec3, hi: DVec3) -> SmallBox {
-    const EPS: f64 = f32::EPSILON as f64;
     let down = |x: f64| {
         let y = x - x.abs() * EPS - TINY;
         (if y < BIG { y } else { BIG }) as f32
