@@ -78,6 +78,8 @@ pub(crate) struct Boxes {
     root: SmallBox,
     /// Each vertex's box at the last refit.
     vertices: Vec<SmallBox>,
+    /// Each face's box at the last refit.
+    faces: Vec<SmallBox>,
 }
 
 /// What a refit boxes: the faces (CSR) and their vertices' motion.
@@ -105,22 +107,25 @@ impl Fit<'_> {
         outward(lo - pad, hi + pad)
     }
 
-    /// The boxes of vertices `first..first + out.len()` into `out`, each as [`Fit::vertex`]
-    /// makes it: in AVX registers where the machine has them (through `pulp`, as the normal
-    /// cones' scans), a vertex's three coordinates in three lanes, every operation of
-    /// [`outward`] in its order, so the same bits.
-    fn vertices_into(&self, first: usize, out: &mut [SmallBox]) {
+    /// Boxes `first..first + out.len()` into `out`: of the vertices, each as [`Fit::vertex`]
+    /// makes it, or with `corners` (the vertices' boxes) of the faces, each as [`Fit::face`]
+    /// makes it. In vector registers where the machine has AVX2 (through `pulp`, as the
+    /// normal cones' scans): a vertex's three coordinates, or a box's three low and three
+    /// high sides, in three lanes, the union and every operation of [`outward`] in their
+    /// order, so the same bits.
+    fn boxes_into(&self, corners: Option<&[SmallBox]>, first: usize, out: &mut [SmallBox]) {
         #[cfg(target_arch = "x86_64")]
         if let Some(simd) = pulp::x86::V3::try_new() {
-            return simd.vectorize(lanes::VertexBoxes {
+            return simd.vectorize(lanes::Boxing {
                 simd,
                 fit: self,
+                corners,
                 first,
                 out,
             });
         }
-        for (v, b) in (first..).zip(out) {
-            *b = self.vertex(v);
+        for (k, b) in (first..).zip(out) {
+            *b = corners.map_or_else(|| self.vertex(k), |vertices| self.face(vertices, k));
         }
     }
 
@@ -149,6 +154,7 @@ impl Default for Boxes {
             leaf_slot: Vec::new(),
             root: EMPTY,
             vertices: Vec::new(),
+            faces: Vec::new(),
         }
     }
 }
@@ -183,6 +189,7 @@ impl Boxes {
             leaf_slot,
             root: EMPTY,
             vertices: Vec::new(),
+            faces: Vec::new(),
         }
     }
 
@@ -192,18 +199,28 @@ impl Boxes {
         let count = fit.start.len();
         self.vertices.resize(count, EMPTY);
         if count < PARALLEL_LEVEL {
-            fit.vertices_into(0, &mut self.vertices);
+            fit.boxes_into(None, 0, &mut self.vertices);
         } else {
             self.vertices
                 .par_chunks_mut(REFIT_RUN)
                 .enumerate()
-                .for_each(|(c, out)| fit.vertices_into(c * REFIT_RUN, out));
+                .for_each(|(c, out)| fit.boxes_into(None, c * REFIT_RUN, out));
         }
+        let faces = fit.face_offsets.len() - 1;
+        self.faces.resize(faces, EMPTY);
         let vertices = &self.vertices[..];
-        let face_box = |f: usize| fit.face(vertices, f);
+        if faces < PARALLEL_LEVEL {
+            fit.boxes_into(Some(vertices), 0, &mut self.faces);
+        } else {
+            self.faces
+                .par_chunks_mut(REFIT_RUN)
+                .enumerate()
+                .for_each(|(c, out)| fit.boxes_into(Some(vertices), c * REFIT_RUN, out));
+        }
+        let face_boxes = &self.faces[..];
         let child_box = |c: u32, done: &[Record]| {
             if c & LEAF != 0 {
-                face_box((c & !LEAF) as usize)
+                face_boxes[(c & !LEAF) as usize]
             } else {
                 let [a, b] = &done[c as usize].boxes;
                 union(a, b)
@@ -236,7 +253,7 @@ impl Boxes {
         } else {
             rayon::scope(|_| fit_all());
         }
-        self.fit_root(fit);
+        self.fit_root();
     }
 
     /// Recomputes, after a refit from which only the vertices `moved` changed, the boxes those
@@ -250,12 +267,14 @@ impl Boxes {
         }
         let mut stale = vec![false; self.records.len()];
         for &f in faces {
+            let face = fit.face(&self.vertices, f as usize);
+            self.faces[f as usize] = face;
             let slot = self.leaf_slot[f as usize];
             if slot == NONE {
                 continue;
             }
             let record = (slot >> 1) as usize;
-            self.records[record].boxes[(slot & 1) as usize] = fit.face(&self.vertices, f as usize);
+            self.records[record].boxes[(slot & 1) as usize] = face;
             stale[record] = true;
         }
         // A child's record precedes its parent's, so one pass in order carries every change up;
@@ -274,14 +293,14 @@ impl Boxes {
             self.records[parent as usize].boxes[side] = merged;
             stale[parent as usize] = true;
         }
-        self.fit_root(fit);
+        self.fit_root();
     }
 
     /// The root's box from its record's two, or from the single face's when there is none.
-    fn fit_root(&mut self, fit: &Fit<'_>) {
+    fn fit_root(&mut self) {
         self.root = match self.records.last() {
             Some(r) => union(&r.boxes[0], &r.boxes[1]),
-            None => fit.face(&self.vertices, 0),
+            None => self.faces[0],
         };
     }
 
@@ -470,24 +489,26 @@ impl Boxes {
     }
 }
 
-/// [`Fit::vertices_into`] in AVX registers.
+/// [`Fit::boxes_into`] in vector registers.
 #[cfg(target_arch = "x86_64")]
 mod lanes {
-    use std::arch::x86_64::{__m256d, _CMP_GT_OQ, _CMP_LT_OQ};
+    use std::arch::x86_64::{__m128, __m256d, _CMP_GT_OQ, _CMP_LT_OQ};
 
     use parry3d_f64::math::Vector as DVec3;
     use pulp::x86::V3;
 
     use super::{Fit, SmallBox};
 
-    pub(super) struct VertexBoxes<'a, 'b> {
+    /// What [`Fit::boxes_into`] boxes: the vertices, or with `corners` the faces.
+    pub(super) struct Boxing<'a, 'b> {
         pub(super) simd: V3,
         pub(super) fit: &'a Fit<'b>,
+        pub(super) corners: Option<&'a [SmallBox]>,
         pub(super) first: usize,
         pub(super) out: &'a mut [SmallBox],
     }
 
-    impl pulp::NullaryFnOnce for VertexBoxes<'_, '_> {
+    impl pulp::NullaryFnOnce for Boxing<'_, '_> {
         type Output = ();
 
         #[inline(always)]
@@ -495,25 +516,75 @@ mod lanes {
             let Self {
                 simd,
                 fit,
+                corners,
                 first,
                 out,
             } = self;
-            let avx = simd.avx;
-            let pad = avx._mm256_set1_pd(fit.margin);
-            for (v, b) in (first..).zip(out) {
-                let p = coordinates(simd, fit.start[v]);
-                let (lo, hi) = match fit.end {
-                    Some(end) => {
-                        let q = coordinates(simd, end[v]);
-                        (avx._mm256_min_pd(p, q), avx._mm256_max_pd(p, q))
-                    }
-                    None => (p, p),
-                };
-                let lo: [f32; 4] = pulp::cast(rounded::<false>(simd, avx._mm256_sub_pd(lo, pad)));
-                let hi: [f32; 4] = pulp::cast(rounded::<true>(simd, avx._mm256_add_pd(hi, pad)));
-                *b = [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]];
+            match corners {
+                None => vertex_boxes(simd, fit, first, out),
+                Some(vertices) => face_boxes(simd, fit, vertices, first, out),
             }
         }
+    }
+
+    /// [`Fit::vertex`] of vertices `first..` into `out`.
+    #[inline(always)]
+    fn vertex_boxes(simd: V3, fit: &Fit, first: usize, out: &mut [SmallBox]) {
+        let avx = simd.avx;
+        let pad = avx._mm256_set1_pd(fit.margin);
+        for (v, b) in (first..).zip(out) {
+            let p = coordinates(simd, fit.start[v]);
+            let (lo, hi) = match fit.end {
+                Some(end) => {
+                    let q = coordinates(simd, end[v]);
+                    (avx._mm256_min_pd(p, q), avx._mm256_max_pd(p, q))
+                }
+                None => (p, p),
+            };
+            *b = padded(simd, lo, hi, pad);
+        }
+    }
+
+    /// [`Fit::face`] of faces `first..` into `out`, from their corners' `vertices` boxes.
+    #[inline(always)]
+    fn face_boxes(simd: V3, fit: &Fit, vertices: &[SmallBox], first: usize, out: &mut [SmallBox]) {
+        let (sse, avx) = (simd.sse, simd.avx);
+        let offsets = fit.face_offsets;
+        for (f, b) in (first..).zip(out) {
+            let corners = &fit.face_vertices[offsets[f] as usize..offsets[f + 1] as usize];
+            // The union's `a < b ? a : b` and `a > b ? a : b` are `minps` and `maxps`, the
+            // accumulated box first, zeros and all.
+            let mut lo = sse._mm_set1_ps(f32::INFINITY);
+            let mut hi = sse._mm_set1_ps(f32::NEG_INFINITY);
+            for &v in corners {
+                let (low, high) = sides(simd, &vertices[v as usize]);
+                lo = sse._mm_min_ps(lo, low);
+                hi = sse._mm_max_ps(hi, high);
+            }
+            let (lo, hi) = (avx._mm256_cvtps_pd(lo), avx._mm256_cvtps_pd(hi));
+            let extent: [f64; 4] = pulp::cast(avx._mm256_sub_pd(hi, lo));
+            let pad = avx._mm256_set1_pd(fit.relative * (extent[0] + extent[1] + extent[2]));
+            *b = padded(simd, lo, hi, pad);
+        }
+    }
+
+    /// A box's low sides and its high sides, each in lanes 0–2 (lane 3 unspecified): two
+    /// loads of four and a shuffle.
+    #[inline(always)]
+    fn sides(simd: V3, b: &SmallBox) -> (__m128, __m128) {
+        let low: __m128 = pulp::cast(<[f32; 4]>::try_from(&b[..4]).expect("four sides"));
+        let high: __m128 = pulp::cast(<[f32; 4]>::try_from(&b[2..]).expect("four sides"));
+        (low, simd.avx._mm_permute_ps::<0b00_11_10_01>(high))
+    }
+
+    /// The box from `lo` to `hi` (lanes 0–2) loosened by `pad` and rounded outward, as
+    /// [`super::outward`] of `lo − pad` and `hi + pad`.
+    #[inline(always)]
+    fn padded(simd: V3, lo: __m256d, hi: __m256d, pad: __m256d) -> SmallBox {
+        let avx = simd.avx;
+        let lo: [f32; 4] = pulp::cast(rounded::<false>(simd, avx._mm256_sub_pd(lo, pad)));
+        let hi: [f32; 4] = pulp::cast(rounded::<true>(simd, avx._mm256_add_pd(hi, pad)));
+        [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]]
     }
 
     /// `p` in lanes 0–2 (lane 3 zero).
@@ -617,11 +688,9 @@ fn distance2(b: &SmallBox, q: DVec3) -> f64 {
 mod tests {
     use super::*;
 
-    /// The vertex boxes in vector registers are [`Fit::vertex`]'s to the bit, static and
-    /// swept, with and without a margin, for coordinates of either sign from subnormal to
-    /// beyond the range of `f32`, zeros of both signs included.
-    #[test]
-    fn vertex_boxes_in_lanes_are_the_scalar_ones() {
+    /// Start and end positions of `n` vertices whose coordinates have either sign, from
+    /// subnormal to beyond the range of `f32`, zeros of both signs among them.
+    fn motion(n: usize) -> (Vec<DVec3>, Vec<DVec3>) {
         let values = [
             0.0,
             -0.0,
@@ -636,12 +705,21 @@ mod tests {
             7e-3,
         ];
         let at = |k: usize| values[k % values.len()];
-        let start: Vec<DVec3> = (0..97)
+        let start = (0..n)
             .map(|k| DVec3::new(at(k), at(3 * k + 1), at(7 * k + 2)))
             .collect();
-        let end: Vec<DVec3> = (0..97)
+        let end = (0..n)
             .map(|k| DVec3::new(at(5 * k + 3), at(k + 4), -at(2 * k)))
             .collect();
+        (start, end)
+    }
+
+    /// The vertex boxes in vector registers are [`Fit::vertex`]'s to the bit, static and
+    /// swept, with and without a margin, for coordinates of either sign from subnormal to
+    /// beyond the range of `f32`, zeros of both signs included.
+    #[test]
+    fn vertex_boxes_in_lanes_are_the_scalar_ones() {
+        let (start, end) = motion(97);
         let bits = |b: &SmallBox| b.map(f32::to_bits);
         for (swept, margin) in [(false, 0.0), (false, 1e-3), (true, 0.0), (true, 2.5e-3)] {
             let fit = Fit {
@@ -653,7 +731,7 @@ mod tests {
                 relative: 0.0,
             };
             let mut out = vec![EMPTY; start.len() - 5];
-            fit.vertices_into(5, &mut out);
+            fit.boxes_into(None, 5, &mut out);
             for (k, b) in out.iter().enumerate() {
                 assert_eq!(bits(b), bits(&fit.vertex(5 + k)), "vertex {}", 5 + k);
             }
@@ -688,6 +766,38 @@ mod tests {
         );
         let d = distance2(&unit, DVec3::new(2.0, 0.5, -1.0));
         assert!(d <= 2.0 && d > 2.0 - 1e-6);
+    }
+
+    /// The face boxes in vector registers are [`Fit::face`]'s to the bit: triangles, quads
+    /// and a pentagon over corner boxes with sides of either sign from subnormal to beyond
+    /// the range of `f32`, zeros of both signs among them, with and without relative slack.
+    #[test]
+    fn face_boxes_in_lanes_are_the_scalar_ones() {
+        let (start, end) = motion(41);
+        // Faces of three, four and five corners, each vertex in several.
+        let (mut face_offsets, mut face_vertices) = (vec![0u32], Vec::new());
+        for f in 0..60u32 {
+            let corners = 3 + f % 3;
+            face_vertices.extend((0..corners).map(|k| (f * 7 + k * 11) % 41));
+            face_offsets.push(face_vertices.len() as u32);
+        }
+        let bits = |b: &SmallBox| b.map(f32::to_bits);
+        for (relative, margin) in [(0.0, 0.0), (1e-3, 0.0), (2f64.powi(-20), 2.5e-3)] {
+            let fit = Fit {
+                face_offsets: &face_offsets,
+                face_vertices: &face_vertices,
+                start: &start,
+                end: Some(&end),
+                margin,
+                relative,
+            };
+            let vertices: Vec<SmallBox> = (0..start.len()).map(|v| fit.vertex(v)).collect();
+            let mut out = vec![EMPTY; 60 - 4];
+            fit.boxes_into(Some(&vertices), 4, &mut out);
+            for (k, b) in out.iter().enumerate() {
+                assert_eq!(bits(b), bits(&fit.face(&vertices, 4 + k)), "face {}", 4 + k);
+            }
+        }
     }
 
     #[test]
