@@ -93,10 +93,17 @@ fn single_pad(pad: f64) -> f32 {
 }
 
 /// Whether two boxes come within `pad` (from [`single_pad`]) of each other: six comparisons
-/// in single precision, with no box within the pad ever missed.
+/// in single precision, with no box within the pad ever missed. All six are made and then
+/// combined, without a branch between them: with a branch after each, the 64² drape's run
+/// took 0.3% more instructions.
 #[inline(always)]
 fn overlap(a: &SmallBox, b: &SmallBox, pad: f32) -> bool {
-    (0..3).all(|k| a[k] <= b[k + 3] + pad && b[k] <= a[k + 3] + pad)
+    (a[0] <= b[3] + pad)
+        & (b[0] <= a[3] + pad)
+        & (a[1] <= b[4] + pad)
+        & (b[1] <= a[4] + pad)
+        & (a[2] <= b[5] + pad)
+        & (b[2] <= a[5] + pad)
 }
 
 fn collect<T>(f: impl FnOnce(&mut Vec<T>)) -> Vec<T> {
