@@ -10,10 +10,12 @@
 //!
 //! A refit first rounds each vertex outward to a single-precision box (around its start and end
 //! positions for a swept refit, loosened by the margin), so a face's box is the union of its
-//! corners' boxes with no further rounding. Then it pulls, level by level and in parallel within
-//! a level: a record boxes its leaf children from their corners and merges the two boxes of each
-//! internal child's record, which a lower level has just finished. Each vertex is rounded once,
-//! each face boxed once and each record written once.
+//! corners' boxes, rounded again only by the face's relative slack. Then it boxes every face,
+//! and pulls, level by level and in parallel within a level: a record takes its leaf
+//! children's face boxes and merges the two boxes of each internal child's record, which a
+//! lower level has just finished. Each vertex is rounded once, each face boxed once and each
+//! record written once; the vertices and the faces are boxed in vector registers where the
+//! machine has AVX2 ([`Fit::boxes_into`]).
 //!
 //! Point queries descend depth first, nearer child first, pruning on a bound that the caller
 //! may shrink as it finds closer faces; a query farther than the bound from the root's box
