@@ -131,6 +131,19 @@ impl Fit<'_> {
         }
     }
 
+    /// [`Fit::boxes_into`] of all `count` vertices, or faces with `corners`, into `out`: in
+    /// runs of [`REFIT_RUN`] on the pool when there are [`PARALLEL_LEVEL`] or more.
+    fn boxes_all(&self, corners: Option<&[SmallBox]>, count: usize, out: &mut Vec<SmallBox>) {
+        out.resize(count, EMPTY);
+        if count < PARALLEL_LEVEL {
+            self.boxes_into(corners, 0, out);
+        } else {
+            out.par_chunks_mut(REFIT_RUN)
+                .enumerate()
+                .for_each(|(c, out)| self.boxes_into(corners, c * REFIT_RUN, out));
+        }
+    }
+
     /// The box of face `f`: the union of its corners' `vertices` boxes, loosened by
     /// [`Fit::relative`].
     #[inline]
@@ -198,27 +211,12 @@ impl Boxes {
     /// Recomputes every box bottom-up from `fit`. Internal nodes are stored level by level,
     /// level `k` being `level_offsets[k]..level_offsets[k + 1]`.
     pub(crate) fn refit(&mut self, level_offsets: &[u32], fit: &Fit<'_>) {
-        let count = fit.start.len();
-        self.vertices.resize(count, EMPTY);
-        if count < PARALLEL_LEVEL {
-            fit.boxes_into(None, 0, &mut self.vertices);
-        } else {
-            self.vertices
-                .par_chunks_mut(REFIT_RUN)
-                .enumerate()
-                .for_each(|(c, out)| fit.boxes_into(None, c * REFIT_RUN, out));
-        }
-        let faces = fit.face_offsets.len() - 1;
-        self.faces.resize(faces, EMPTY);
-        let vertices = &self.vertices[..];
-        if faces < PARALLEL_LEVEL {
-            fit.boxes_into(Some(vertices), 0, &mut self.faces);
-        } else {
-            self.faces
-                .par_chunks_mut(REFIT_RUN)
-                .enumerate()
-                .for_each(|(c, out)| fit.boxes_into(Some(vertices), c * REFIT_RUN, out));
-        }
+        fit.boxes_all(None, fit.start.len(), &mut self.vertices);
+        fit.boxes_all(
+            Some(&self.vertices),
+            fit.face_offsets.len() - 1,
+            &mut self.faces,
+        );
         let face_boxes = &self.faces[..];
         let child_box = |c: u32, done: &[Record]| {
             if c & LEAF != 0 {
@@ -771,8 +769,8 @@ mod tests {
     }
 
     /// The face boxes in vector registers are [`Fit::face`]'s to the bit: triangles, quads
-    /// and a pentagon over corner boxes with sides of either sign from subnormal to beyond
-    /// the range of `f32`, zeros of both signs among them, with and without relative slack.
+    /// and pentagons over the boxes of corners whose coordinates have either sign, from
+    /// subnormal to beyond the range of `f32`, with and without relative slack.
     #[test]
     fn face_boxes_in_lanes_are_the_scalar_ones() {
         let (start, end) = motion(41);
